@@ -1,0 +1,1 @@
+//! Colours ↔ bits: the colour codings of the format.

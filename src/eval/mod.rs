@@ -1,0 +1,1 @@
+//! The paper's evaluation: PSNR of sampling strategies and reconstructions.

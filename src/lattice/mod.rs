@@ -1,0 +1,1 @@
+//! Exact arithmetic for the H2 root lattice: Z\[τ\] and Z\[ζ\], no floating point.

@@ -1,0 +1,27 @@
+//! # qcs — progressive images on quasicrystal sample sites
+//!
+//! An image is stored as colours sampled at the sites of a 2D cut-and-project
+//! quasicrystal (golden ratio, roots of H2). The sites are never stored: they
+//! follow from the image size and a few header numbers by exact integer
+//! arithmetic, in a progressive order, so every prefix of a `.qcs` file is a
+//! uniformly spread subset of the samples and decodes to a whole picture.
+//!
+//! The pipeline, one module per stage:
+//! [`lattice`] (exact arithmetic in Z\[τ\] and Z\[ζ\]) →
+//! [`sites`] (the progressive site sequence and the other samplers) →
+//! [`coding`] (colours ↔ bits) → [`container`] (bytes on disk) →
+//! [`reconstruction`] (samples → picture at any size) and [`styles`].
+#![forbid(unsafe_code)]
+
+pub mod error;
+pub mod lattice;
+pub mod limits;
+pub mod sites;
+pub mod reconstruction;
+pub mod container;
+pub mod coding;
+pub mod styles;
+pub mod eval;
+
+pub use error::{Error, Result};
+pub use limits::Limits;

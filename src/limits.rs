@@ -1,0 +1,113 @@
+//! Resource limits, checked before anything sized by input is allocated.
+
+use thiserror::Error as ThisError;
+
+/// Upper bounds a decoder (or encoder) enforces before allocating.
+///
+/// The defaults are safe for untrusted input; [`Limits::none`] lifts them to the
+/// format's own bounds.
+///
+/// ```
+/// let mut limits = qcs::Limits::default();
+/// limits.max_samples = 1 << 20;
+/// assert!(limits.check_samples(1000).is_ok());
+/// assert!(limits.check_samples(1 << 21).is_err());
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct Limits {
+    /// Largest image width or height accepted from a header.
+    pub max_dimension: u32,
+    /// Largest width × height accepted from a header.
+    pub max_image_pixels: u64,
+    /// Largest output picture (width × height) a render may produce.
+    pub max_output_pixels: u64,
+    /// Largest number of samples that will be decoded and triangulated.
+    pub max_samples: u64,
+    /// Largest total size of metadata (ICC, text) kept by a decoder.
+    pub max_metadata_bytes: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_dimension: 1 << 15,
+            max_image_pixels: 1 << 28,
+            max_output_pixels: 1 << 28,
+            max_samples: 1 << 24,
+            max_metadata_bytes: 1 << 24,
+        }
+    }
+}
+
+/// Which limit was exceeded, with the value that exceeded it.
+#[derive(Clone, Debug, PartialEq, Eq, ThisError)]
+#[non_exhaustive]
+pub enum LimitError {
+    /// Width or height above `max_dimension`.
+    #[error("image dimension {0} exceeds the limit {1}")]
+    Dimension(u64, u64),
+    /// Width × height above `max_image_pixels`.
+    #[error("image of {0} pixels exceeds the limit {1}")]
+    ImagePixels(u64, u64),
+    /// Output size above `max_output_pixels`.
+    #[error("output of {0} pixels exceeds the limit {1}")]
+    OutputPixels(u64, u64),
+    /// Sample count above `max_samples`.
+    #[error("{0} samples exceed the limit {1}")]
+    Samples(u64, u64),
+    /// Metadata above `max_metadata_bytes`.
+    #[error("{0} metadata bytes exceed the limit {1}")]
+    Metadata(u64, u64),
+}
+
+impl Limits {
+    /// No limits beyond the format's own (dimensions below 2^16 for the site construction).
+    pub fn none() -> Self {
+        Limits {
+            max_dimension: u16::MAX as u32,
+            max_image_pixels: u64::MAX,
+            max_output_pixels: u64::MAX,
+            max_samples: u64::MAX,
+            max_metadata_bytes: u64::MAX,
+        }
+    }
+
+    /// Checks an image size against `max_dimension` and `max_image_pixels`.
+    pub fn check_image(&self, width: u64, height: u64) -> Result<(), LimitError> {
+        let d = width.max(height);
+        if d > self.max_dimension as u64 {
+            return Err(LimitError::Dimension(d, self.max_dimension as u64));
+        }
+        let p = width.saturating_mul(height);
+        if p > self.max_image_pixels {
+            return Err(LimitError::ImagePixels(p, self.max_image_pixels));
+        }
+        Ok(())
+    }
+
+    /// Checks a requested output size against `max_output_pixels`.
+    pub fn check_output(&self, width: u64, height: u64) -> Result<(), LimitError> {
+        let p = width.saturating_mul(height);
+        if p > self.max_output_pixels {
+            return Err(LimitError::OutputPixels(p, self.max_output_pixels));
+        }
+        Ok(())
+    }
+
+    /// Checks a sample count against `max_samples`.
+    pub fn check_samples(&self, n: u64) -> Result<(), LimitError> {
+        if n > self.max_samples {
+            return Err(LimitError::Samples(n, self.max_samples));
+        }
+        Ok(())
+    }
+
+    /// Checks a metadata size against `max_metadata_bytes`.
+    pub fn check_metadata(&self, n: u64) -> Result<(), LimitError> {
+        if n > self.max_metadata_bytes {
+            return Err(LimitError::Metadata(n, self.max_metadata_bytes));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,1 @@
+//! Samples → picture, at any output size and from any prefix.

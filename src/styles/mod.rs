@@ -1,0 +1,1 @@
+//! Stylized renderings of a sample set (the paper's mosaic, strokes, Voronoi, …).
