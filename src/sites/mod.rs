@@ -17,3 +17,7 @@ pub trait Sampler {
     /// A short lower-case name (`quasicrystal`, `periodic`, …).
     fn name(&self) -> &'static str;
 }
+
+mod quasicrystal;
+
+pub use quasicrystal::{site_order, Frame, FrameError, Quasicrystal, Site, DENSITY, FX_ONE};
