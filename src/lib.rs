@@ -16,6 +16,7 @@
 pub mod error;
 pub mod lattice;
 pub mod limits;
+pub mod sampling;
 pub mod sites;
 pub mod reconstruction;
 pub mod container;
