@@ -1,12 +1,216 @@
-//! The `.qcs` byte format (spec/format.md).
+//! The `.qcs` byte format (spec/format.md): header, level schedule, chunks, a push parser,
+//! a writer and an inspector.
+//!
+//! A file is a [`Header`] followed by chunks. Level `k`'s colours are in the `k`-th `L` chunk, whose
+//! sample range comes from [`Header::level_range`]. [`Parser`] takes bytes in any chunking and
+//! emits [`Event`]s as soon as they can be known; [`ContainerWriter`] writes a file; [`inspect`]
+//! lists what a (possibly truncated or damaged) file holds.
+//!
+//! ```
+//! use qcs::container::{ContainerWriter, Header, Layout, Coding, Parser, Event};
+//! use qcs::coding::raw;
+//!
+//! let header = Header::new(4, 3, Layout::Grey, 5, 2, Coding::Raw { bits: 8 });
+//! let mut w = ContainerWriter::new(Vec::new(), &header)?;
+//! for k in 0..header.level_count() {
+//!     let range = header.level_range(k).unwrap();
+//!     let values: Vec<u8> = range.map(|i| (i * 50) as u8).collect();
+//!     w.write_level(&raw::pack(&values, 8)?)?;
+//! }
+//! w.write_text("Author", "me")?;
+//! let file = w.finish()?;
+//!
+//! let mut parser = Parser::new(Default::default());
+//! let mut events = Vec::new();
+//! for byte in &file {
+//!     parser.push(std::slice::from_ref(byte), &mut events)?;
+//! }
+//! assert!(parser.is_complete());
+//! assert_eq!(parser.progress().samples_verified, 5);
+//! assert!(matches!(events[0], Event::Header(_)));
+//! # Ok::<(), qcs::Error>(())
+//! ```
+
+pub mod chunk;
+mod header;
+mod inspect;
+mod parser;
+pub mod varint;
+mod writer;
+
+pub use header::{Coding, Header, LatticeFields, Layout, MAGIC, MAX_HEADER_LEN, VERSION};
+pub use inspect::{inspect, ChunkStatus, InspectedChunk, InspectedLevel, Inspection};
+pub use parser::{EndState, Event, Metadata, Parser, ParserOptions, Progress};
+pub use varint::VarintError;
+pub use writer::ContainerWriter;
 
 use thiserror::Error as ThisError;
 
-/// A violation of the byte format.
+/// Where a chunk is: its index among the chunks (0 = first after the header), its tag, and the
+/// byte offset of its tag byte in the file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ChunkRef {
+    /// Index among the file's chunks, 0 for the first one after the header.
+    pub index: u32,
+    /// The tag byte.
+    pub tag: u8,
+    /// Byte offset of the tag in the file.
+    pub offset: u64,
+}
+
+impl std::fmt::Display for ChunkRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "chunk #{} {} at byte {}",
+            self.index,
+            chunk::tag_name(self.tag),
+            self.offset
+        )
+    }
+}
+
+/// A violation of the byte format, saying what and where (byte offsets are from the file start).
 #[derive(Debug, Clone, PartialEq, Eq, ThisError)]
 #[non_exhaustive]
 pub enum FormatError {
-    /// The file does not start with the qcs magic.
-    #[error("not a qcs file (bad magic)")]
-    BadMagic,
+    /// The file does not start with the qcs magic `qcs`.
+    #[error("not a qcs file (bad magic byte 0x{found:02X} at byte {offset})")]
+    BadMagic {
+        /// Offset of the first wrong byte (0..3).
+        offset: u64,
+        /// The byte found there.
+        found: u8,
+    },
+    /// The version byte is not one this decoder reads.
+    #[error("unsupported format version {version} (this decoder reads version 1) at byte 3")]
+    UnsupportedVersion {
+        /// The version found.
+        version: u8,
+    },
+    /// Reserved flag bits (1–7) are set.
+    #[error("reserved header flag bits set: 0x{flags:02X} at byte 4")]
+    ReservedFlags {
+        /// The whole flags byte.
+        flags: u8,
+    },
+    /// A header varint is malformed.
+    #[error("header field {field} at byte {offset}: {error}")]
+    HeaderVarint {
+        /// The field's name as in the spec.
+        field: &'static str,
+        /// Offset of the field's first byte.
+        offset: u64,
+        /// What is wrong with it.
+        error: VarintError,
+    },
+    /// A header field has a value the format forbids.
+    #[error("header field {field} at byte {offset} is {value}, expected {expected}")]
+    InvalidField {
+        /// The field's name as in the spec.
+        field: &'static str,
+        /// Offset of the field's first byte.
+        offset: u64,
+        /// The value found.
+        value: u64,
+        /// What the spec allows.
+        expected: &'static str,
+    },
+    /// The header's CRC does not match its bytes.
+    #[error(
+        "header CRC mismatch at byte {offset}: stored 0x{stored:08X}, computed 0x{computed:08X}"
+    )]
+    HeaderCrc {
+        /// Offset of the CRC field.
+        offset: u64,
+        /// The CRC in the file.
+        stored: u32,
+        /// The CRC of the header bytes.
+        computed: u32,
+    },
+    /// A header ended before all its fields (only from [`Header::parse`] on a complete buffer).
+    #[error("header truncated at byte {offset}")]
+    TruncatedHeader {
+        /// Length of the buffer.
+        offset: u64,
+    },
+    /// A chunk's length varint is malformed.
+    #[error("{chunk}: length: {error}")]
+    ChunkLength {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// What is wrong with it.
+        error: VarintError,
+    },
+    /// A chunk's CRC does not match.
+    #[error("{chunk}: CRC mismatch: stored 0x{stored:08X}, computed 0x{computed:08X}")]
+    ChunkCrc {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// The CRC in the file.
+        stored: u32,
+        /// The CRC of the chunk's tag, length and payload.
+        computed: u32,
+    },
+    /// A level chunk's payload length differs from what the header implies.
+    #[error("{chunk}: level {level} payload is {found} bytes, the header implies {expected}")]
+    LevelLength {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// The level.
+        level: u32,
+        /// The length the header implies.
+        expected: u64,
+        /// The length in the chunk.
+        found: u64,
+    },
+    /// A critical chunk with a tag this decoder does not know.
+    #[error("{chunk}: unknown critical chunk")]
+    UnknownCritical {
+        /// The chunk.
+        chunk: ChunkRef,
+    },
+    /// A metadata chunk placed before level 0.
+    #[error("{chunk}: metadata chunk before level 0")]
+    MetadataBeforeFirstLevel {
+        /// The chunk.
+        chunk: ChunkRef,
+    },
+    /// A level chunk after the last level.
+    #[error("{chunk}: level chunk after the last level")]
+    ExtraLevel {
+        /// The chunk.
+        chunk: ChunkRef,
+    },
+    /// A second ICC profile chunk.
+    #[error("{chunk}: second ICC profile")]
+    DuplicateIcc {
+        /// The chunk.
+        chunk: ChunkRef,
+    },
+    /// A text chunk that is not `key 0x00 value` in UTF-8 with a non-empty key.
+    #[error("{chunk}: malformed text chunk: {reason}")]
+    BadText {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// What is wrong.
+        reason: &'static str,
+    },
+}
+
+impl FormatError {
+    /// The chunk the error is in, if it is in a chunk (not in the header).
+    pub fn chunk(&self) -> Option<ChunkRef> {
+        match self {
+            FormatError::ChunkLength { chunk, .. }
+            | FormatError::ChunkCrc { chunk, .. }
+            | FormatError::LevelLength { chunk, .. }
+            | FormatError::UnknownCritical { chunk }
+            | FormatError::MetadataBeforeFirstLevel { chunk }
+            | FormatError::ExtraLevel { chunk }
+            | FormatError::DuplicateIcc { chunk }
+            | FormatError::BadText { chunk, .. } => Some(*chunk),
+            _ => None,
+        }
+    }
 }

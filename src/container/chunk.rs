@@ -1,0 +1,54 @@
+//! Chunk tags and the chunk framing `tag | length varint | payload | CRC-32 LE` (spec/format.md §Chunks).
+
+use super::varint;
+
+/// `L`: the next level's colour data (critical).
+pub const LEVEL: u8 = b'L';
+/// `i`: an ICC profile, raw bytes (ancillary).
+pub const ICC: u8 = b'i';
+/// `t`: a text comment, UTF-8 `key`, 0x00, UTF-8 `value` (ancillary).
+pub const TEXT: u8 = b't';
+
+/// The bit of a tag byte that marks an ancillary chunk (lower-case ASCII letters have it).
+pub const ANCILLARY_BIT: u8 = 0x20;
+
+/// Whether a chunk with this tag may be skipped by a decoder that does not know it.
+///
+/// ```
+/// use qcs::container::chunk::{is_ancillary, LEVEL, TEXT};
+/// assert!(!is_ancillary(LEVEL));
+/// assert!(is_ancillary(TEXT));
+/// ```
+pub fn is_ancillary(tag: u8) -> bool {
+    tag & ANCILLARY_BIT != 0
+}
+
+/// A printable form of a tag: the ASCII character if it is graphic, else `0xNN`.
+pub fn tag_name(tag: u8) -> String {
+    if tag.is_ascii_graphic() {
+        format!("'{}'", tag as char)
+    } else {
+        format!("0x{tag:02X}")
+    }
+}
+
+/// The complete bytes of one chunk: tag, varint length, payload and CRC-32 (IEEE, little-endian)
+/// over the tag, the length bytes and the payload.
+///
+/// Returns `None` if the payload is longer than `u32::MAX` bytes.
+///
+/// ```
+/// let bytes = qcs::container::chunk::encode(b'x', b"hi").unwrap();
+/// assert_eq!(&bytes[..4], &[b'x', 2, b'h', b'i']);
+/// assert_eq!(bytes.len(), 8);
+/// ```
+pub fn encode(tag: u8, payload: &[u8]) -> Option<Vec<u8>> {
+    let len = u32::try_from(payload.len()).ok()?;
+    let mut out = Vec::with_capacity(payload.len() + 10);
+    out.push(tag);
+    varint::write_u32(&mut out, len);
+    out.extend_from_slice(payload);
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    Some(out)
+}

@@ -1,0 +1,498 @@
+//! The header (spec/format.md §Header) and the level schedule (§Levels).
+
+use super::varint::{self, VarintReader};
+use super::FormatError;
+use std::ops::Range;
+
+/// The magic bytes every `.qcs` file starts with.
+pub const MAGIC: [u8; 3] = *b"qcs";
+/// The format version this crate reads and writes.
+pub const VERSION: u8 = 1;
+/// The longest possible header in bytes (all varints at full length, 255 parameter bytes, lattice).
+pub const MAX_HEADER_LEN: usize = 3 + 1 + 1 + 5 + 5 + 1 + 10 + 10 + 1 + 5 + 255 + 5 + 5 + 5 + 4;
+
+/// Channels per sample and their order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Layout {
+    /// 1 channel: grey, 8 bits.
+    Grey = 1,
+    /// 2 channels: grey then alpha, 8 bits each.
+    GreyAlpha = 2,
+    /// 3 channels: red, green, blue, 8 bits each.
+    Rgb = 3,
+    /// 4 channels: red, green, blue, alpha, 8 bits each.
+    Rgba = 4,
+}
+
+impl Layout {
+    /// Number of channels per sample (the layout byte).
+    ///
+    /// ```
+    /// assert_eq!(qcs::container::Layout::Rgb.channels(), 3);
+    /// ```
+    pub fn channels(self) -> u8 {
+        self as u8
+    }
+
+    /// The layout with this many channels, if any.
+    ///
+    /// ```
+    /// use qcs::container::Layout;
+    /// assert_eq!(Layout::from_channels(4), Some(Layout::Rgba));
+    /// assert_eq!(Layout::from_channels(5), None);
+    /// ```
+    pub fn from_channels(c: u8) -> Option<Layout> {
+        match c {
+            1 => Some(Layout::Grey),
+            2 => Some(Layout::GreyAlpha),
+            3 => Some(Layout::Rgb),
+            4 => Some(Layout::Rgba),
+            _ => None,
+        }
+    }
+}
+
+/// How level payloads code colours.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Coding {
+    /// Coding 0: every channel value quantised to `bits` (1..=8) bits, packed MSB-first
+    /// (see [`crate::coding::raw`]).
+    Raw {
+        /// Bits per channel value, 1..=8.
+        bits: u8,
+    },
+    /// Coding 1 (reserved for the predictive coding): its parameter bytes (≤ 255) are passed
+    /// through uninterpreted, and level payload lengths are not checked by the container.
+    Predictive {
+        /// The coding parameter bytes.
+        params: Vec<u8>,
+    },
+}
+
+impl Coding {
+    /// The coding byte.
+    pub fn id(&self) -> u8 {
+        match self {
+            Coding::Raw { .. } => 0,
+            Coding::Predictive { .. } => 1,
+        }
+    }
+}
+
+/// Explicit lattice fields (present when flags bit 0 is set), in 16.16 fixed point pixels.
+///
+/// Without them the decoder uses the default lattice of spec/sites.md.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LatticeFields {
+    /// Root length, 16.16 fixed point pixels, ≥ 1 (i.e. ≥ 2^-16 px). `0x1_0000` is 1 px.
+    pub root_length: u32,
+    /// Origin x, 16.16 fixed point pixels.
+    pub origin_x: i32,
+    /// Origin y, 16.16 fixed point pixels.
+    pub origin_y: i32,
+}
+
+/// A parsed and validated `.qcs` header.
+///
+/// The fields are public; [`Header::validate`] (called by [`Header::encode`] and by the parsers)
+/// checks the rules of the spec.
+///
+/// ```
+/// use qcs::container::{Header, Layout, Coding};
+/// let h = Header::new(640, 480, Layout::Rgb, 10_000, 64, Coding::Raw { bits: 6 });
+/// let bytes = h.encode()?;
+/// let (parsed, len) = Header::parse(&bytes)?;
+/// assert_eq!(parsed, h);
+/// assert_eq!(len, bytes.len());
+/// # Ok::<(), qcs::Error>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Header {
+    /// Image width in pixels, ≥ 1.
+    pub width: u32,
+    /// Image height in pixels, ≥ 1.
+    pub height: u32,
+    /// Channels per sample.
+    pub layout: Layout,
+    /// Total number of samples N, ≥ 1.
+    pub total_samples: u64,
+    /// Size of the first level L0, ≥ 1 (may exceed N: then there is one level of N samples).
+    pub first_level: u64,
+    /// The colour coding and its parameters.
+    pub coding: Coding,
+    /// Explicit lattice fields, or `None` for the default lattice.
+    pub lattice: Option<LatticeFields>,
+}
+
+/// Internal: why parsing a prefix stopped.
+pub(crate) enum Stop {
+    /// The bytes end before the header does.
+    More,
+    /// The header is malformed.
+    Err(FormatError),
+}
+
+impl From<FormatError> for Stop {
+    fn from(e: FormatError) -> Self {
+        Stop::Err(e)
+    }
+}
+
+struct Cursor<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl Cursor<'_> {
+    fn u8(&mut self) -> Result<u8, Stop> {
+        let b = *self.bytes.get(self.pos).ok_or(Stop::More)?;
+        self.pos += 1;
+        Ok(b)
+    }
+
+    fn varint(&mut self, field: &'static str, bits: u32) -> Result<(u64, u64), Stop> {
+        let offset = self.pos as u64;
+        let mut r = VarintReader::new(bits);
+        loop {
+            let b = self.u8()?;
+            match r.push(b) {
+                Ok(Some(v)) => return Ok((v, offset)),
+                Ok(None) => {}
+                Err(error) => {
+                    return Err(Stop::Err(FormatError::HeaderVarint {
+                        field,
+                        offset,
+                        error,
+                    }))
+                }
+            }
+        }
+    }
+}
+
+fn invalid(field: &'static str, offset: u64, value: u64, expected: &'static str) -> FormatError {
+    FormatError::InvalidField {
+        field,
+        offset,
+        value,
+        expected,
+    }
+}
+
+impl Header {
+    /// A header with the default lattice.
+    pub fn new(
+        width: u32,
+        height: u32,
+        layout: Layout,
+        total_samples: u64,
+        first_level: u64,
+        coding: Coding,
+    ) -> Header {
+        Header {
+            width,
+            height,
+            layout,
+            total_samples,
+            first_level,
+            coding,
+            lattice: None,
+        }
+    }
+
+    /// Number of levels: ⌈log2(N/L0)⌉ + 1 (1 when L0 ≥ N). Never more than 64.
+    ///
+    /// ```
+    /// use qcs::container::{Header, Layout, Coding};
+    /// let h = Header::new(8, 8, Layout::Grey, 100, 10, Coding::Raw { bits: 8 });
+    /// assert_eq!(h.level_count(), 5); // 10, 20, 40, 80, 100
+    /// ```
+    pub fn level_count(&self) -> u32 {
+        let n = self.total_samples;
+        let mut e = self.first_level.min(n);
+        let mut k = 1;
+        while e < n && k < 128 {
+            e = e.saturating_mul(2).min(n);
+            k += 1;
+        }
+        k
+    }
+
+    /// The sample range `[s_k, e_k)` of level `k`, or `None` if there is no level `k`.
+    ///
+    /// ```
+    /// use qcs::container::{Header, Layout, Coding};
+    /// let h = Header::new(8, 8, Layout::Grey, 100, 10, Coding::Raw { bits: 8 });
+    /// assert_eq!(h.level_range(0), Some(0..10));
+    /// assert_eq!(h.level_range(3), Some(40..80));
+    /// assert_eq!(h.level_range(4), Some(80..100));
+    /// assert_eq!(h.level_range(5), None);
+    /// ```
+    pub fn level_range(&self, k: u32) -> Option<Range<u64>> {
+        let n = self.total_samples;
+        let mut s = 0u64;
+        let mut e = self.first_level.min(n);
+        for _ in 0..k {
+            if e >= n {
+                return None;
+            }
+            s = e;
+            e = e.saturating_mul(2).min(n);
+        }
+        if s >= e {
+            return None;
+        }
+        Some(s..e)
+    }
+
+    /// The payload length of level `k` in bytes if the coding fixes it (raw coding:
+    /// ⌈count·channels·B/8⌉), `None` for the predictive coding or if there is no level `k`.
+    ///
+    /// ```
+    /// use qcs::container::{Header, Layout, Coding};
+    /// let h = Header::new(8, 8, Layout::Rgb, 100, 10, Coding::Raw { bits: 5 });
+    /// assert_eq!(h.level_payload_len(0), Some(19)); // 10 samples · 3 · 5 bits = 150 bits
+    /// ```
+    pub fn level_payload_len(&self, k: u32) -> Option<u64> {
+        let range = self.level_range(k)?;
+        match self.coding {
+            Coding::Raw { bits } => crate::coding::raw::payload_len(
+                range.end - range.start,
+                self.layout.channels(),
+                bits,
+            ),
+            Coding::Predictive { .. } => None,
+        }
+    }
+
+    /// Checks the rules of the spec that the types do not already enforce.
+    pub fn validate(&self) -> Result<(), FormatError> {
+        // Offsets are unknown here (0); the parser reports real offsets.
+        self.validate_at(&[0; 7])
+    }
+
+    /// `offsets`: width, height, total, first level, coding params length, coding params, root length.
+    fn validate_at(&self, offsets: &[u64; 7]) -> Result<(), FormatError> {
+        if self.width == 0 {
+            return Err(invalid("width", offsets[0], 0, "≥ 1"));
+        }
+        if self.height == 0 {
+            return Err(invalid("height", offsets[1], 0, "≥ 1"));
+        }
+        if self.total_samples == 0 {
+            return Err(invalid("total samples", offsets[2], 0, "≥ 1"));
+        }
+        if self.first_level == 0 {
+            return Err(invalid("first level size", offsets[3], 0, "≥ 1"));
+        }
+        match &self.coding {
+            Coding::Raw { bits } => {
+                if !(1..=8).contains(bits) {
+                    return Err(invalid(
+                        "raw bits per channel",
+                        offsets[5],
+                        *bits as u64,
+                        "1..=8",
+                    ));
+                }
+                // Every level's payload must fit a chunk (u32 length); the last level is the largest
+                // or equal to the largest but one, so check them all (≤ 64).
+                for k in 0..self.level_count() {
+                    let fits = self
+                        .level_payload_len(k)
+                        .is_some_and(|len| len <= u32::MAX as u64);
+                    if !fits {
+                        return Err(invalid(
+                            "total samples",
+                            offsets[2],
+                            self.total_samples,
+                            "levels whose payload fits in 2^32 − 1 bytes",
+                        ));
+                    }
+                }
+            }
+            Coding::Predictive { params } => {
+                if params.len() > 255 {
+                    return Err(invalid(
+                        "coding params length",
+                        offsets[4],
+                        params.len() as u64,
+                        "≤ 255",
+                    ));
+                }
+            }
+        }
+        if let Some(l) = &self.lattice {
+            if l.root_length == 0 {
+                return Err(invalid("lattice root length", offsets[6], 0, "≥ 1"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The header's bytes, CRC included.
+    ///
+    /// ```
+    /// use qcs::container::{Header, Layout, Coding};
+    /// let bytes = Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 8 }).encode()?;
+    /// assert_eq!(&bytes[..10], &[b'q', b'c', b's', 1, 0, 1, 1, 1, 1, 1]);
+    /// assert_eq!(bytes.len(), 17);
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn encode(&self) -> Result<Vec<u8>, crate::Error> {
+        self.validate()
+            .map_err(|e| crate::Error::Parameter(format!("invalid header: {e}")))?;
+        let mut out = Vec::with_capacity(32);
+        out.extend_from_slice(&MAGIC);
+        out.push(VERSION);
+        out.push(u8::from(self.lattice.is_some()));
+        varint::write_u32(&mut out, self.width);
+        varint::write_u32(&mut out, self.height);
+        out.push(self.layout.channels());
+        varint::write_u64(&mut out, self.total_samples);
+        varint::write_u64(&mut out, self.first_level);
+        out.push(self.coding.id());
+        match &self.coding {
+            Coding::Raw { bits } => {
+                varint::write_u32(&mut out, 1);
+                out.push(*bits);
+            }
+            Coding::Predictive { params } => {
+                varint::write_u32(&mut out, params.len() as u32);
+                out.extend_from_slice(params);
+            }
+        }
+        if let Some(l) = &self.lattice {
+            varint::write_u32(&mut out, l.root_length);
+            varint::write_u32(&mut out, varint::zigzag(l.origin_x));
+            varint::write_u32(&mut out, varint::zigzag(l.origin_y));
+        }
+        let crc = crc32fast::hash(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        Ok(out)
+    }
+
+    /// Parses a header from the start of `bytes`, returning it and its length in bytes.
+    ///
+    /// `bytes` may go on past the header. Limits are not checked here (the [`super::Parser`]
+    /// checks them); a buffer that ends inside the header is [`FormatError::TruncatedHeader`].
+    pub fn parse(bytes: &[u8]) -> Result<(Header, usize), FormatError> {
+        match Self::parse_prefix(bytes) {
+            Ok(r) => Ok(r),
+            Err(Stop::Err(e)) => Err(e),
+            Err(Stop::More) => Err(FormatError::TruncatedHeader {
+                offset: bytes.len() as u64,
+            }),
+        }
+    }
+
+    /// Parses a header from a prefix: `Stop::More` if the bytes end inside it. Errors that change
+    /// how the rest must be read (magic, version, reserved flags, malformed varints, a parameter
+    /// length over 255) are reported as soon as their byte arrives; the value rules after the CRC
+    /// has been checked.
+    pub(crate) fn parse_prefix(bytes: &[u8]) -> Result<(Header, usize), Stop> {
+        let mut c = Cursor { bytes, pos: 0 };
+        for (i, &m) in MAGIC.iter().enumerate() {
+            let b = c.u8()?;
+            if b != m {
+                return Err(FormatError::BadMagic {
+                    offset: i as u64,
+                    found: b,
+                }
+                .into());
+            }
+        }
+        let version = c.u8()?;
+        if version != VERSION {
+            return Err(if version > VERSION {
+                FormatError::UnsupportedVersion { version }
+            } else {
+                invalid("version", 3, version as u64, "1")
+            }
+            .into());
+        }
+        let flags = c.u8()?;
+        if flags & !1 != 0 {
+            return Err(FormatError::ReservedFlags { flags }.into());
+        }
+        let (width, o_w) = c.varint("width", 32)?;
+        let (height, o_h) = c.varint("height", 32)?;
+        let o_layout = c.pos as u64;
+        let layout_byte = c.u8()?;
+        let (total, o_n) = c.varint("total samples", 64)?;
+        let (first, o_l0) = c.varint("first level size", 64)?;
+        let o_coding = c.pos as u64;
+        let coding_byte = c.u8()?;
+        let (plen, o_plen) = c.varint("coding params length", 32)?;
+        if plen > 255 {
+            return Err(invalid("coding params length", o_plen, plen, "≤ 255").into());
+        }
+        let o_params = c.pos as u64;
+        let end = c.pos + plen as usize;
+        if bytes.len() < end {
+            return Err(Stop::More);
+        }
+        let params = &bytes[c.pos..end];
+        c.pos = end;
+        let mut o_root = 0;
+        let lattice = if flags & 1 != 0 {
+            let (root, o) = c.varint("lattice root length", 32)?;
+            o_root = o;
+            let (ox, _) = c.varint("lattice origin x", 32)?;
+            let (oy, _) = c.varint("lattice origin y", 32)?;
+            Some(LatticeFields {
+                root_length: root as u32,
+                origin_x: varint::unzigzag(ox as u32),
+                origin_y: varint::unzigzag(oy as u32),
+            })
+        } else {
+            None
+        };
+        let o_crc = c.pos;
+        let mut crc_bytes = [0u8; 4];
+        for b in crc_bytes.iter_mut() {
+            *b = c.u8()?;
+        }
+        let stored = u32::from_le_bytes(crc_bytes);
+        let computed = crc32fast::hash(&bytes[..o_crc]);
+        if stored != computed && !cfg!(fuzzing) {
+            return Err(FormatError::HeaderCrc {
+                offset: o_crc as u64,
+                stored,
+                computed,
+            }
+            .into());
+        }
+        let layout = Layout::from_channels(layout_byte)
+            .ok_or_else(|| invalid("layout", o_layout, layout_byte as u64, "1, 2, 3 or 4"))?;
+        let coding = match coding_byte {
+            0 => {
+                if plen != 1 {
+                    return Err(invalid(
+                        "coding params length",
+                        o_plen,
+                        plen,
+                        "1 for the raw coding",
+                    )
+                    .into());
+                }
+                Coding::Raw { bits: params[0] }
+            }
+            1 => Coding::Predictive {
+                params: params.to_vec(),
+            },
+            other => return Err(invalid("coding", o_coding, other as u64, "0 or 1").into()),
+        };
+        let header = Header {
+            width: width as u32,
+            height: height as u32,
+            layout,
+            total_samples: total,
+            first_level: first,
+            coding,
+            lattice,
+        };
+        header.validate_at(&[o_w, o_h, o_n, o_l0, o_plen, o_params, o_root])?;
+        Ok((header, c.pos))
+    }
+}

@@ -1,0 +1,202 @@
+//! A listing of what a (possibly truncated or damaged) file holds, for `qcs info`.
+
+use super::parser::{EndState, Event, Metadata, Parser, ParserOptions};
+use super::{varint, ChunkRef, FormatError, Header};
+use crate::Limits;
+use std::ops::Range;
+
+/// The CRC status of a chunk.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ChunkStatus {
+    /// Complete, CRC matched.
+    Verified,
+    /// The file ends inside it.
+    Truncated,
+    /// It breaks the format (CRC mismatch, bad length, …); nothing after it was read.
+    Bad(FormatError),
+}
+
+/// One chunk of an [`Inspection`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InspectedChunk {
+    /// Index, tag and offset.
+    pub chunk: ChunkRef,
+    /// The payload length from the chunk's length field, if it was readable.
+    pub payload_len: Option<u32>,
+    /// The level it holds, for `L` chunks.
+    pub level: Option<u32>,
+    /// CRC status.
+    pub status: ChunkStatus,
+}
+
+/// One level of an [`Inspection`] (every level the header implies, present or not).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InspectedLevel {
+    /// The level index.
+    pub level: u32,
+    /// Its sample range.
+    pub samples: Range<u64>,
+    /// The payload length the header implies (raw coding).
+    pub expected_payload_len: Option<u64>,
+    /// Its chunk, if it was reached.
+    pub chunk: Option<ChunkRef>,
+    /// Payload bytes present in the file.
+    pub payload_present: u64,
+    /// `Some(Verified)`, `Some(Truncated)`, `Some(Bad(..))`, or `None` if its chunk is absent.
+    pub status: Option<ChunkStatus>,
+}
+
+/// What [`inspect`] found.
+#[derive(Debug)]
+pub struct Inspection {
+    /// File length in bytes.
+    pub file_len: u64,
+    /// The header, if complete and valid.
+    pub header: Option<Header>,
+    /// Header length in bytes, if complete.
+    pub header_len: Option<u64>,
+    /// Every chunk reached, in order.
+    pub chunks: Vec<InspectedChunk>,
+    /// Every level the header implies.
+    pub levels: Vec<InspectedLevel>,
+    /// Verified metadata.
+    pub metadata: Vec<Metadata>,
+    /// Samples in verified levels.
+    pub samples_verified: u64,
+    /// Samples whose bytes are present (verified or not).
+    pub samples_available: u64,
+    /// Where the file ends.
+    pub end: EndState,
+    /// The error that stopped reading, if any (a header error, a limit, or a chunk error).
+    pub error: Option<crate::Error>,
+}
+
+/// Lists the header, chunks (offsets, lengths, CRC status), levels (sample ranges, bytes present)
+/// and metadata of a `.qcs` file or prefix. Never fails: problems are reported in the result.
+/// Uses [`Limits::none`]: memory stays bounded by `bytes.len()`.
+///
+/// ```
+/// use qcs::container::{inspect, ContainerWriter, Header, Layout, Coding, ChunkStatus};
+/// let header = Header::new(3, 3, Layout::Grey, 3, 1, Coding::Raw { bits: 8 });
+/// let mut w = ContainerWriter::new(Vec::new(), &header)?;
+/// w.write_level(&[1])?;
+/// w.write_level(&[2, 3])?;
+/// let mut file = w.finish()?;
+/// file.truncate(file.len() - 5); // cut inside level 1
+/// let info = inspect(&file);
+/// assert_eq!(info.levels.len(), 2);
+/// assert_eq!(info.levels[0].status, Some(ChunkStatus::Verified));
+/// assert_eq!(info.levels[1].status, Some(ChunkStatus::Truncated));
+/// assert_eq!(info.levels[1].payload_present, 1);
+/// assert_eq!(info.samples_available, 2);
+/// # Ok::<(), qcs::Error>(())
+/// ```
+pub fn inspect(bytes: &[u8]) -> Inspection {
+    let mut parser = Parser::new(ParserOptions::with_limits(Limits::none()).recover(true));
+    let mut events = Vec::new();
+    let result = parser.push(bytes, &mut events);
+    let header = parser.header().cloned();
+    let header_len = header
+        .as_ref()
+        .and_then(|_| Header::parse(bytes).ok())
+        .map(|(_, len)| len as u64);
+    let read_len = |c: &ChunkRef| -> Option<u32> {
+        let start = usize::try_from(c.offset).ok()?.checked_add(1)?;
+        match varint::read(bytes.get(start..)?, 32) {
+            Ok(Some((v, _))) => u32::try_from(v).ok(),
+            _ => None,
+        }
+    };
+    let mut chunks = Vec::new();
+    let mut metadata = Vec::new();
+    let mut level_data: Vec<u64> = Vec::new();
+    let mut error = result.err();
+    let levels_verified = parser.progress().levels_verified;
+    for ev in events {
+        match ev {
+            Event::LevelStart { .. } => level_data.push(0),
+            Event::LevelData { bytes, .. } => {
+                if let Some(n) = level_data.last_mut() {
+                    *n += bytes.len() as u64;
+                }
+            }
+            Event::LevelVerified { level, chunk } => {
+                chunks.push(InspectedChunk {
+                    chunk,
+                    payload_len: read_len(&chunk),
+                    level: Some(level),
+                    status: ChunkStatus::Verified,
+                });
+            }
+            Event::Metadata { chunk, metadata: m } => {
+                metadata.push(m);
+                chunks.push(InspectedChunk {
+                    chunk,
+                    payload_len: read_len(&chunk),
+                    level: None,
+                    status: ChunkStatus::Verified,
+                });
+            }
+            Event::Skipped { chunk, payload_len } => chunks.push(InspectedChunk {
+                chunk,
+                payload_len: Some(payload_len),
+                level: None,
+                status: ChunkStatus::Verified,
+            }),
+            Event::Stopped { error: e } => {
+                if let Some(chunk) = e.chunk() {
+                    chunks.push(InspectedChunk {
+                        chunk,
+                        payload_len: read_len(&chunk),
+                        level: (chunk.tag == super::chunk::LEVEL).then_some(levels_verified),
+                        status: ChunkStatus::Bad(e.clone()),
+                    });
+                }
+                error = Some(e.into());
+            }
+            Event::Header(_) | Event::LevelsComplete => {}
+        }
+    }
+    if let EndState::InChunk(chunk) = parser.end_state() {
+        chunks.push(InspectedChunk {
+            chunk,
+            payload_len: read_len(&chunk),
+            level: (chunk.tag == super::chunk::LEVEL).then_some(levels_verified),
+            status: ChunkStatus::Truncated,
+        });
+    }
+    let mut levels = Vec::new();
+    if let Some(h) = &header {
+        for k in 0..h.level_count() {
+            let Some(samples) = h.level_range(k) else {
+                break;
+            };
+            let c = chunks.iter().find(|c| c.level == Some(k));
+            levels.push(InspectedLevel {
+                level: k,
+                samples,
+                expected_payload_len: h.level_payload_len(k),
+                chunk: c.map(|c| c.chunk),
+                payload_present: level_data.get(k as usize).copied().unwrap_or(0),
+                status: c.map(|c| c.status.clone()),
+            });
+        }
+    }
+    let p = parser.progress();
+    Inspection {
+        file_len: bytes.len() as u64,
+        header,
+        header_len,
+        chunks,
+        levels,
+        metadata,
+        samples_verified: p.samples_verified,
+        samples_available: if parser.end_state() == EndState::Stopped {
+            p.samples_verified
+        } else {
+            p.samples_available
+        },
+        end: parser.end_state(),
+        error,
+    }
+}

@@ -1,0 +1,656 @@
+//! The push parser: bytes in any chunking → [`Event`]s (spec/format.md §Decoding and truncation).
+
+use super::chunk::{self, ICC, LEVEL, TEXT};
+use super::header::{Header, Stop, MAX_HEADER_LEN};
+use super::varint::VarintReader;
+use super::{ChunkRef, Coding, FormatError};
+use crate::Limits;
+use std::ops::Range;
+
+/// How a [`Parser`] treats limits and damage.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct ParserOptions {
+    /// Limits checked on the header (image size, samples) and on metadata, before allocating.
+    pub limits: Limits,
+    /// On a format error after the header (CRC mismatch, bad chunk), stop with
+    /// [`Event::Stopped`] and keep the longest verified prefix instead of failing.
+    pub recover: bool,
+}
+
+impl ParserOptions {
+    /// Options with the given limits, no recovery.
+    pub fn with_limits(limits: Limits) -> Self {
+        ParserOptions {
+            limits,
+            recover: false,
+        }
+    }
+
+    /// These options with recovery switched on or off.
+    pub fn recover(mut self, recover: bool) -> Self {
+        self.recover = recover;
+        self
+    }
+}
+
+impl From<Limits> for ParserOptions {
+    fn from(limits: Limits) -> Self {
+        ParserOptions::with_limits(limits)
+    }
+}
+
+/// A metadata chunk's content.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Metadata {
+    /// `i`: an ICC profile.
+    Icc(Vec<u8>),
+    /// `t`: a text comment.
+    Text {
+        /// The key (non-empty, UTF-8, no 0x00).
+        key: String,
+        /// The value (UTF-8).
+        value: String,
+    },
+}
+
+/// What the parser found, in file order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Event {
+    /// The header is complete, its CRC matches and it is within the limits.
+    Header(Header),
+    /// A level chunk starts; its payload bytes follow as [`Event::LevelData`].
+    LevelStart {
+        /// The level.
+        level: u32,
+        /// Where its chunk is.
+        chunk: ChunkRef,
+        /// The samples it holds.
+        samples: Range<u64>,
+        /// Its payload length in bytes.
+        payload_len: u32,
+    },
+    /// Payload bytes of the current level, as they arrive: **not yet verified** by the CRC.
+    /// Concatenated, a level's `LevelData` bytes are its payload.
+    LevelData {
+        /// The level.
+        level: u32,
+        /// The next bytes of its payload.
+        bytes: Vec<u8>,
+    },
+    /// The level's chunk CRC matched: its samples are verified.
+    LevelVerified {
+        /// The level.
+        level: u32,
+        /// Where its chunk is.
+        chunk: ChunkRef,
+    },
+    /// The last level was verified: only ancillary chunks may follow.
+    LevelsComplete,
+    /// A metadata chunk, CRC verified.
+    Metadata {
+        /// Where it is.
+        chunk: ChunkRef,
+        /// Its content.
+        metadata: Metadata,
+    },
+    /// An unknown ancillary chunk, CRC verified and skipped.
+    Skipped {
+        /// Where it is.
+        chunk: ChunkRef,
+        /// Its payload length.
+        payload_len: u32,
+    },
+    /// Recovery mode only: a format error; the unverified data of the current chunk must be dropped,
+    /// and the parser ignores all further input. Everything verified before stays valid.
+    Stopped {
+        /// The error that stopped the parser.
+        error: FormatError,
+    },
+}
+
+/// How far the parser has got.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Progress {
+    /// Bytes consumed from the start of the file.
+    pub bytes_consumed: u64,
+    /// Whether the header has been parsed and verified.
+    pub header_complete: bool,
+    /// Number of levels whose CRC has been verified.
+    pub levels_verified: u32,
+    /// Samples in verified levels (`[0, samples_verified)`).
+    pub samples_verified: u64,
+    /// Samples whose bytes have all arrived (`≥ samples_verified`): the verified ones plus, in the
+    /// raw coding, the complete samples of a partial level chunk, which are **unverified**. With the
+    /// predictive coding the container cannot tell, and this equals `samples_verified`.
+    pub samples_available: u64,
+}
+
+/// Where the bytes given so far end (spec/format.md §Truncation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EndState {
+    /// The header has not been fully received: nothing to show (a decoder may render grey).
+    InHeader,
+    /// Between chunks, with levels missing: every level so far is complete and verified.
+    BetweenChunks,
+    /// Inside a chunk: the complete samples of a partial level payload are usable but unverified.
+    InChunk(ChunkRef),
+    /// Every level is verified and the bytes end between chunks: a complete file.
+    Complete,
+    /// Recovery mode stopped on an error: only verified samples are valid.
+    Stopped,
+    /// A fatal error was returned; the parser is poisoned.
+    Failed,
+}
+
+#[derive(Clone, Debug)]
+enum Kind {
+    Level { level: u32, samples: Range<u64> },
+    Icc(Vec<u8>),
+    Text(Vec<u8>),
+    Skip,
+}
+
+#[derive(Clone, Debug)]
+enum State {
+    Header,
+    Tag,
+    Length {
+        chunk: ChunkRef,
+        reader: VarintReader,
+        hasher: crc32fast::Hasher,
+    },
+    Payload {
+        chunk: ChunkRef,
+        len: u32,
+        received: u32,
+        hasher: crc32fast::Hasher,
+        kind: Kind,
+    },
+    Crc {
+        chunk: ChunkRef,
+        len: u32,
+        computed: u32,
+        bytes: [u8; 4],
+        n: usize,
+        kind: Kind,
+    },
+    Stopped,
+    Poisoned,
+}
+
+/// A push parser for `.qcs` bytes: feed it any chunking of the file (one byte at a time, empty
+/// slices, or all at once) and it emits the same events, as early as they can be known.
+///
+/// Memory is bounded by the bytes given and by [`Limits`]: level payloads are passed through as
+/// they arrive, never buffered; metadata is buffered up to `max_metadata_bytes` in total; the
+/// header (at most [`MAX_HEADER_LEN`] bytes) is buffered until complete.
+///
+/// After a fatal error the parser is poisoned and every further `push` fails.
+///
+/// ```
+/// use qcs::container::{ContainerWriter, Header, Layout, Coding, Parser, Event, EndState};
+/// let header = Header::new(2, 2, Layout::Rgb, 3, 1, Coding::Raw { bits: 8 });
+/// let mut w = ContainerWriter::new(Vec::new(), &header)?;
+/// w.write_level(&[1, 2, 3])?;
+/// w.write_level(&[4, 5, 6, 7, 8, 9])?;
+/// let file = w.finish()?;
+///
+/// // A prefix that ends inside level 1, after its first sample.
+/// let cut = file.len() - 4 /* crc */ - 3;
+/// let mut p = Parser::new(Default::default());
+/// let mut events = Vec::new();
+/// p.push(&file[..cut], &mut events)?;
+/// assert_eq!(p.progress().samples_verified, 1);
+/// assert_eq!(p.progress().samples_available, 2);
+/// assert!(matches!(p.end_state(), EndState::InChunk(_)));
+/// p.push(&file[cut..], &mut events)?;
+/// assert_eq!(p.end_state(), EndState::Complete);
+/// # Ok::<(), qcs::Error>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Parser {
+    opts: ParserOptions,
+    offset: u64,
+    state: State,
+    header: Option<Header>,
+    level_count: u32,
+    header_buf: Vec<u8>,
+    chunk_index: u32,
+    next_level: u32,
+    samples_verified: u64,
+    metadata_bytes: u64,
+    seen_icc: bool,
+}
+
+impl Parser {
+    /// A parser at the start of a file.
+    pub fn new(opts: ParserOptions) -> Self {
+        Parser {
+            opts,
+            offset: 0,
+            state: State::Header,
+            header: None,
+            level_count: 0,
+            header_buf: Vec::new(),
+            chunk_index: 0,
+            next_level: 0,
+            samples_verified: 0,
+            metadata_bytes: 0,
+            seen_icc: false,
+        }
+    }
+
+    /// The header, once it has been parsed.
+    pub fn header(&self) -> Option<&Header> {
+        self.header.as_ref()
+    }
+
+    /// Whether every level is verified and the input ends between chunks.
+    pub fn is_complete(&self) -> bool {
+        self.end_state() == EndState::Complete
+    }
+
+    /// Where the bytes given so far end.
+    pub fn end_state(&self) -> EndState {
+        match &self.state {
+            State::Header => EndState::InHeader,
+            State::Tag if self.next_level >= self.level_count => EndState::Complete,
+            State::Tag => EndState::BetweenChunks,
+            State::Length { chunk, .. }
+            | State::Payload { chunk, .. }
+            | State::Crc { chunk, .. } => EndState::InChunk(*chunk),
+            State::Stopped => EndState::Stopped,
+            State::Poisoned => EndState::Failed,
+        }
+    }
+
+    /// The current counts (see [`Progress`]).
+    pub fn progress(&self) -> Progress {
+        let mut available = self.samples_verified;
+        if let (
+            State::Payload {
+                kind: Kind::Level { samples, .. },
+                received,
+                ..
+            }
+            | State::Crc {
+                kind: Kind::Level { samples, .. },
+                len: received,
+                ..
+            },
+            Some(h),
+        ) = (&self.state, &self.header)
+        {
+            if let Coding::Raw { bits } = h.coding {
+                let sample_bits = h.layout.channels() as u64 * bits as u64;
+                let complete = (*received as u64 * 8) / sample_bits;
+                available = samples.start + complete.min(samples.end - samples.start);
+            }
+        }
+        Progress {
+            bytes_consumed: self.offset,
+            header_complete: self.header.is_some(),
+            levels_verified: self.next_level,
+            samples_verified: self.samples_verified,
+            samples_available: available,
+        }
+    }
+
+    /// The chunk being read and how many of its payload bytes have arrived, if inside a chunk.
+    pub fn current_chunk(&self) -> Option<(ChunkRef, u32)> {
+        match &self.state {
+            State::Length { chunk, .. } => Some((*chunk, 0)),
+            State::Payload {
+                chunk, received, ..
+            } => Some((*chunk, *received)),
+            State::Crc { chunk, len, .. } => Some((*chunk, *len)),
+            _ => None,
+        }
+    }
+
+    /// Consumes `input` (any length, including 0) and appends the events it completes to `events`.
+    ///
+    /// "Not enough bytes yet" is never an error. Events found before an error are still appended.
+    /// A format error fails (and poisons the parser) unless recovery is on and the header is
+    /// complete, in which case [`Event::Stopped`] is appended and `Ok` returned; a limit error
+    /// always fails.
+    pub fn push(&mut self, input: &[u8], events: &mut Vec<Event>) -> Result<(), crate::Error> {
+        match self.state {
+            State::Poisoned => {
+                return Err(crate::Error::Parameter(
+                    "qcs parser used after a fatal error".into(),
+                ))
+            }
+            State::Stopped => return Ok(()),
+            _ => {}
+        }
+        let mut i = 0;
+        while i < input.len() {
+            match self.step(&input[i..], events) {
+                Ok(n) => {
+                    i += n;
+                    self.offset += n as u64;
+                }
+                Err(Fail::Format(e)) => {
+                    if self.opts.recover && self.header.is_some() {
+                        self.state = State::Stopped;
+                        events.push(Event::Stopped { error: e });
+                        return Ok(());
+                    }
+                    self.state = State::Poisoned;
+                    return Err(e.into());
+                }
+                Err(Fail::Limits(e)) => {
+                    self.state = State::Poisoned;
+                    return Err(e.into());
+                }
+            }
+            if matches!(self.state, State::Stopped) {
+                return Ok(());
+            }
+        }
+        Ok(())
+    }
+
+    /// One step on a non-empty input: returns how many bytes it consumed (≥ 1).
+    fn step(&mut self, input: &[u8], events: &mut Vec<Event>) -> Result<usize, Fail> {
+        let state = std::mem::replace(&mut self.state, State::Poisoned);
+        match state {
+            State::Header => self.step_header(input, events),
+            State::Tag => {
+                self.step_tag(input[0])?;
+                Ok(1)
+            }
+            State::Length {
+                chunk,
+                mut reader,
+                mut hasher,
+            } => {
+                let b = input[0];
+                hasher.update(&[b]);
+                match reader.push(b) {
+                    Err(error) => Err(Fail::Format(FormatError::ChunkLength { chunk, error })),
+                    Ok(None) => {
+                        self.state = State::Length {
+                            chunk,
+                            reader,
+                            hasher,
+                        };
+                        Ok(1)
+                    }
+                    Ok(Some(len)) => {
+                        // A u32 reader never yields more than u32::MAX.
+                        let len = u32::try_from(len).unwrap_or(u32::MAX);
+                        let kind = self.start_payload(chunk, len, events)?;
+                        self.state = if len == 0 {
+                            State::Crc {
+                                chunk,
+                                len,
+                                computed: hasher.finalize(),
+                                bytes: [0; 4],
+                                n: 0,
+                                kind,
+                            }
+                        } else {
+                            State::Payload {
+                                chunk,
+                                len,
+                                received: 0,
+                                hasher,
+                                kind,
+                            }
+                        };
+                        Ok(1)
+                    }
+                }
+            }
+            State::Payload {
+                chunk,
+                len,
+                mut received,
+                mut hasher,
+                mut kind,
+            } => {
+                let want = (len - received) as usize;
+                let take = want.min(input.len());
+                let bytes = &input[..take];
+                hasher.update(bytes);
+                match &mut kind {
+                    Kind::Level { level, .. } => events.push(Event::LevelData {
+                        level: *level,
+                        bytes: bytes.to_vec(),
+                    }),
+                    Kind::Icc(buf) | Kind::Text(buf) => buf.extend_from_slice(bytes),
+                    Kind::Skip => {}
+                }
+                received += take as u32;
+                self.state = if received == len {
+                    State::Crc {
+                        chunk,
+                        len,
+                        computed: hasher.finalize(),
+                        bytes: [0; 4],
+                        n: 0,
+                        kind,
+                    }
+                } else {
+                    State::Payload {
+                        chunk,
+                        len,
+                        received,
+                        hasher,
+                        kind,
+                    }
+                };
+                Ok(take)
+            }
+            State::Crc {
+                chunk,
+                len,
+                computed,
+                mut bytes,
+                mut n,
+                kind,
+            } => {
+                bytes[n] = input[0];
+                n += 1;
+                if n < 4 {
+                    self.state = State::Crc {
+                        chunk,
+                        len,
+                        computed,
+                        bytes,
+                        n,
+                        kind,
+                    };
+                    return Ok(1);
+                }
+                let stored = u32::from_le_bytes(bytes);
+                if stored != computed && !cfg!(fuzzing) {
+                    return Err(Fail::Format(FormatError::ChunkCrc {
+                        chunk,
+                        stored,
+                        computed,
+                    }));
+                }
+                self.finish_chunk(chunk, len, kind, events)?;
+                self.chunk_index = self.chunk_index.saturating_add(1);
+                self.state = State::Tag;
+                Ok(1)
+            }
+            State::Stopped | State::Poisoned => {
+                // push() never steps in these states.
+                self.state = state;
+                Ok(input.len())
+            }
+        }
+    }
+
+    fn step_header(&mut self, input: &[u8], events: &mut Vec<Event>) -> Result<usize, Fail> {
+        let before = self.header_buf.len();
+        let room = MAX_HEADER_LEN - before;
+        let take = room.min(input.len());
+        self.header_buf.extend_from_slice(&input[..take]);
+        match Header::parse_prefix(&self.header_buf) {
+            Err(Stop::More) => {
+                if self.header_buf.len() >= MAX_HEADER_LEN {
+                    // Cannot happen: a header of MAX_HEADER_LEN bytes always parses or fails.
+                    return Err(Fail::Format(FormatError::TruncatedHeader {
+                        offset: MAX_HEADER_LEN as u64,
+                    }));
+                }
+                self.state = State::Header;
+                Ok(take)
+            }
+            Err(Stop::Err(e)) => Err(Fail::Format(e)),
+            Ok((header, len)) => {
+                let limits = &self.opts.limits;
+                limits
+                    .check_image(header.width as u64, header.height as u64)
+                    .map_err(Fail::Limits)?;
+                limits
+                    .check_samples(header.total_samples)
+                    .map_err(Fail::Limits)?;
+                self.level_count = header.level_count();
+                self.header = Some(header.clone());
+                self.header_buf = Vec::new();
+                events.push(Event::Header(header));
+                self.state = State::Tag;
+                Ok(len - before)
+            }
+        }
+    }
+
+    fn step_tag(&mut self, tag: u8) -> Result<(), Fail> {
+        let chunk = ChunkRef {
+            index: self.chunk_index,
+            tag,
+            offset: self.offset,
+        };
+        if tag == LEVEL {
+            if self.next_level >= self.level_count {
+                return Err(Fail::Format(FormatError::ExtraLevel { chunk }));
+            }
+        } else if !chunk::is_ancillary(tag) {
+            return Err(Fail::Format(FormatError::UnknownCritical { chunk }));
+        } else if self.next_level == 0 {
+            return Err(Fail::Format(FormatError::MetadataBeforeFirstLevel {
+                chunk,
+            }));
+        } else if tag == ICC && self.seen_icc {
+            return Err(Fail::Format(FormatError::DuplicateIcc { chunk }));
+        }
+        let mut hasher = crc32fast::Hasher::new();
+        hasher.update(&[tag]);
+        self.state = State::Length {
+            chunk,
+            reader: VarintReader::new(32),
+            hasher,
+        };
+        Ok(())
+    }
+
+    fn start_payload(
+        &mut self,
+        chunk: ChunkRef,
+        len: u32,
+        events: &mut Vec<Event>,
+    ) -> Result<Kind, Fail> {
+        let header = match &self.header {
+            Some(h) => h,
+            None => return Ok(Kind::Skip), // unreachable: chunks follow the header
+        };
+        match chunk.tag {
+            LEVEL => {
+                let level = self.next_level;
+                let samples = header.level_range(level).unwrap_or(0..0);
+                if let Some(expected) = header.level_payload_len(level) {
+                    if expected != len as u64 {
+                        return Err(Fail::Format(FormatError::LevelLength {
+                            chunk,
+                            level,
+                            expected,
+                            found: len as u64,
+                        }));
+                    }
+                }
+                events.push(Event::LevelStart {
+                    level,
+                    chunk,
+                    samples: samples.clone(),
+                    payload_len: len,
+                });
+                Ok(Kind::Level { level, samples })
+            }
+            ICC | TEXT => {
+                let total = self.metadata_bytes.saturating_add(len as u64);
+                self.opts
+                    .limits
+                    .check_metadata(total)
+                    .map_err(Fail::Limits)?;
+                self.metadata_bytes = total;
+                if chunk.tag == ICC {
+                    self.seen_icc = true;
+                    Ok(Kind::Icc(Vec::new()))
+                } else {
+                    Ok(Kind::Text(Vec::new()))
+                }
+            }
+            _ => Ok(Kind::Skip),
+        }
+    }
+
+    fn finish_chunk(
+        &mut self,
+        chunk: ChunkRef,
+        len: u32,
+        kind: Kind,
+        events: &mut Vec<Event>,
+    ) -> Result<(), Fail> {
+        match kind {
+            Kind::Level { level, samples } => {
+                self.samples_verified = samples.end;
+                self.next_level += 1;
+                events.push(Event::LevelVerified { level, chunk });
+                if self.next_level == self.level_count {
+                    events.push(Event::LevelsComplete);
+                }
+            }
+            Kind::Icc(data) => events.push(Event::Metadata {
+                chunk,
+                metadata: Metadata::Icc(data),
+            }),
+            Kind::Text(data) => {
+                let bad = |reason| Fail::Format(FormatError::BadText { chunk, reason });
+                let nul = data
+                    .iter()
+                    .position(|&b| b == 0)
+                    .ok_or_else(|| bad("no 0x00 after the key"))?;
+                if nul == 0 {
+                    return Err(bad("empty key"));
+                }
+                let key = std::str::from_utf8(&data[..nul]).map_err(|_| bad("key is not UTF-8"))?;
+                let value =
+                    std::str::from_utf8(&data[nul + 1..]).map_err(|_| bad("value is not UTF-8"))?;
+                events.push(Event::Metadata {
+                    chunk,
+                    metadata: Metadata::Text {
+                        key: key.to_owned(),
+                        value: value.to_owned(),
+                    },
+                });
+            }
+            Kind::Skip => events.push(Event::Skipped {
+                chunk,
+                payload_len: len,
+            }),
+        }
+        Ok(())
+    }
+}
+
+enum Fail {
+    Format(FormatError),
+    Limits(crate::limits::LimitError),
+}

@@ -1,0 +1,170 @@
+//! Writing a `.qcs` file to any [`std::io::Write`].
+
+use super::chunk::{self, ICC, LEVEL, TEXT};
+use super::Header;
+use std::io::Write;
+
+/// Writes a header, then level chunks in order, with metadata chunks placed after level 0.
+///
+/// Metadata given before level 0 is held back and written right after it (the format forbids
+/// metadata before level 0). The caller supplies each level's payload bytes (e.g. from
+/// [`crate::coding::raw::pack`]); for the raw coding their length is checked against the header.
+///
+/// ```
+/// use qcs::container::{ContainerWriter, Header, Layout, Coding};
+/// let header = Header::new(2, 1, Layout::Grey, 2, 1, Coding::Raw { bits: 8 });
+/// let mut w = ContainerWriter::new(Vec::new(), &header)?;
+/// w.write_icc(b"fake profile")?;        // held until level 0 is written
+/// w.write_level(&[200])?;
+/// w.write_level(&[100])?;
+/// let file = w.finish()?;
+/// assert_eq!(&file[..3], b"qcs");
+/// # Ok::<(), qcs::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct ContainerWriter<W: Write> {
+    inner: W,
+    header: Header,
+    level_count: u32,
+    next_level: u32,
+    pending: Vec<Vec<u8>>,
+    written: u64,
+    icc_written: bool,
+}
+
+impl<W: Write> ContainerWriter<W> {
+    /// Validates and writes the header.
+    pub fn new(mut inner: W, header: &Header) -> Result<Self, crate::Error> {
+        let bytes = header.encode()?;
+        inner.write_all(&bytes)?;
+        Ok(ContainerWriter {
+            inner,
+            header: header.clone(),
+            level_count: header.level_count(),
+            next_level: 0,
+            pending: Vec::new(),
+            written: bytes.len() as u64,
+            icc_written: false,
+        })
+    }
+
+    /// The header being written.
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// The index of the next level to write (= levels written so far).
+    pub fn next_level(&self) -> u32 {
+        self.next_level
+    }
+
+    /// Bytes written so far.
+    pub fn bytes_written(&self) -> u64 {
+        self.written
+    }
+
+    fn put(&mut self, tag: u8, payload: &[u8]) -> Result<(), crate::Error> {
+        let bytes = chunk::encode(tag, payload).ok_or_else(|| {
+            crate::Error::Parameter(format!(
+                "chunk payload of {} bytes exceeds 2^32 − 1",
+                payload.len()
+            ))
+        })?;
+        self.inner.write_all(&bytes)?;
+        self.written += bytes.len() as u64;
+        Ok(())
+    }
+
+    /// Writes the next level's chunk (`L`) with `payload` as its colour data.
+    pub fn write_level(&mut self, payload: &[u8]) -> Result<(), crate::Error> {
+        let k = self.next_level;
+        if k >= self.level_count {
+            return Err(crate::Error::Parameter(format!(
+                "all {} levels already written",
+                self.level_count
+            )));
+        }
+        if let Some(expected) = self.header.level_payload_len(k) {
+            if expected != payload.len() as u64 {
+                return Err(crate::Error::Parameter(format!(
+                    "level {k} payload is {} bytes, the header implies {expected}",
+                    payload.len()
+                )));
+            }
+        }
+        self.put(LEVEL, payload)?;
+        self.next_level += 1;
+        for chunk in std::mem::take(&mut self.pending) {
+            self.inner.write_all(&chunk)?;
+            self.written += chunk.len() as u64;
+        }
+        Ok(())
+    }
+
+    /// Writes (or, before level 0, queues) an ancillary chunk. `tag` must have the ancillary bit
+    /// (0x20) set; the payload is written as given. At most one ICC (`i`) chunk.
+    pub fn write_ancillary(&mut self, tag: u8, payload: &[u8]) -> Result<(), crate::Error> {
+        if !chunk::is_ancillary(tag) {
+            return Err(crate::Error::Parameter(format!(
+                "tag {} is not ancillary",
+                chunk::tag_name(tag)
+            )));
+        }
+        if tag == ICC {
+            if self.icc_written {
+                return Err(crate::Error::Parameter(
+                    "a file holds at most one ICC profile".into(),
+                ));
+            }
+            self.icc_written = true;
+        }
+        if self.next_level == 0 {
+            let bytes = chunk::encode(tag, payload).ok_or_else(|| {
+                crate::Error::Parameter("chunk payload exceeds 2^32 − 1 bytes".into())
+            })?;
+            self.pending.push(bytes);
+            Ok(())
+        } else {
+            self.put(tag, payload)
+        }
+    }
+
+    /// Writes an ICC profile chunk (`i`). At most one per file.
+    pub fn write_icc(&mut self, profile: &[u8]) -> Result<(), crate::Error> {
+        self.write_ancillary(ICC, profile)
+    }
+
+    /// Writes a text chunk (`t`): `key` (non-empty, no 0x00), 0x00, `value`.
+    pub fn write_text(&mut self, key: &str, value: &str) -> Result<(), crate::Error> {
+        if key.is_empty() || key.contains('\0') {
+            return Err(crate::Error::Parameter(
+                "text key must be non-empty and contain no NUL".into(),
+            ));
+        }
+        let mut payload = Vec::with_capacity(key.len() + 1 + value.len());
+        payload.extend_from_slice(key.as_bytes());
+        payload.push(0);
+        payload.extend_from_slice(value.as_bytes());
+        self.write_ancillary(TEXT, &payload)
+    }
+
+    /// Checks that every level was written, flushes and returns the inner writer.
+    ///
+    /// To stop early on purpose (a deliberately truncated file is still valid), use
+    /// [`ContainerWriter::into_inner`].
+    pub fn finish(mut self) -> Result<W, crate::Error> {
+        if self.next_level < self.level_count {
+            return Err(crate::Error::Parameter(format!(
+                "only {} of {} levels written",
+                self.next_level, self.level_count
+            )));
+        }
+        self.inner.flush()?;
+        Ok(self.inner)
+    }
+
+    /// Returns the inner writer without checks (queued metadata not yet written is dropped).
+    pub fn into_inner(self) -> W {
+        self.inner
+    }
+}
