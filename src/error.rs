@@ -15,6 +15,9 @@ pub enum Error {
     /// The file or request is valid but exceeds the configured [`crate::Limits`].
     #[error("limit exceeded: {0}")]
     Limits(#[from] crate::limits::LimitError),
+    /// The bytes end inside the header: there is nothing to draw yet.
+    #[error("need more data: the header is incomplete")]
+    NeedMoreData,
     /// A parameter given by the caller is out of range.
     #[error("invalid parameter: {0}")]
     Parameter(String),

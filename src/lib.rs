@@ -15,6 +15,8 @@
 
 pub mod coding;
 pub mod container;
+mod decoder;
+mod encoder;
 pub mod error;
 pub mod eval;
 pub mod lattice;
@@ -24,5 +26,8 @@ pub mod sampling;
 pub mod sites;
 pub mod styles;
 
+pub use decoder::{decode, DecodeOptions, DecodedImage, Picture, StreamDecoder};
+pub use encoder::{encode, encode_to, EncodeOptions};
 pub use error::{Error, Result};
+pub use reconstruction::Method;
 pub use limits::Limits;

@@ -82,6 +82,14 @@ pub enum FormatError {
         /// The byte found there.
         found: u8,
     },
+    /// More samples than pixels (the site construction requires N ≤ W·H, spec/sites.md §4).
+    #[error("{samples} samples in an image of {pixels} pixels (at most one sample per pixel)")]
+    TooManySamples {
+        /// N from the header.
+        samples: u64,
+        /// W·H.
+        pixels: u64,
+    },
     /// The version byte is not one this decoder reads.
     #[error("unsupported format version {version} (this decoder reads version 1) at byte 3")]
     UnsupportedVersion {

@@ -1,0 +1,351 @@
+//! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
+
+use crate::coding::raw::RawUnpacker;
+use crate::container::{Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions};
+use crate::reconstruction::{Method, SampleSet};
+use crate::sites::{Frame, Point, Quasicrystal};
+use crate::{Error, Limits, Result};
+use image::DynamicImage;
+
+/// A decoded picture and how much of the file it rests on.
+#[derive(Clone, Debug)]
+pub struct DecodedImage {
+    /// The picture, in the file's layout (grey, grey+alpha, RGB or RGBA, 8 bits).
+    pub image: DynamicImage,
+    /// Samples the picture was rendered from.
+    pub samples_used: u64,
+    /// How many of those are verified by their chunk's CRC (the rest come from a partial chunk).
+    pub samples_verified: u64,
+    /// Levels received completely and verified.
+    pub levels_complete: u32,
+    /// Whether this is the final picture: every sample of the file, all verified.
+    pub is_final: bool,
+}
+
+/// A render of a [`StreamDecoder`]: a preview while samples are missing, or the final picture.
+#[derive(Clone, Debug)]
+pub enum Picture {
+    /// Rendered from a prefix of the samples: more bytes will sharpen it.
+    Preview(DecodedImage),
+    /// Rendered from every sample of the file, all verified.
+    Final(DecodedImage),
+}
+
+impl Picture {
+    /// Whether this is the final picture.
+    pub fn is_final(&self) -> bool {
+        matches!(self, Picture::Final(_))
+    }
+    /// The decoded picture, preview or final.
+    pub fn decoded(&self) -> &DecodedImage {
+        match self {
+            Picture::Preview(d) | Picture::Final(d) => d,
+        }
+    }
+    /// The picture itself.
+    pub fn into_image(self) -> DynamicImage {
+        match self {
+            Picture::Preview(d) | Picture::Final(d) => d.image,
+        }
+    }
+}
+
+/// A push decoder: feed bytes as they arrive, render at any moment.
+///
+/// ```
+/// use qcs::{Method, StreamDecoder};
+/// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(32, 24, |x, y| image::Rgb([x as u8 * 8, y as u8 * 10, 90])));
+/// let bytes = qcs::encode(&img, &Default::default())?;
+/// let mut dec = StreamDecoder::new(qcs::Limits::default());
+/// for byte in &bytes[..bytes.len() / 2] {
+///     dec.push(std::slice::from_ref(byte))?; // one byte at a time
+/// }
+/// let preview = dec.render(Method::Gouraud, 64, 48)?; // any size, any moment
+/// assert!(!preview.is_final());
+/// dec.push(&bytes[bytes.len() / 2..])?;
+/// assert!(dec.render(Method::Shepard, 32, 24)?.is_final());
+/// # Ok::<(), qcs::Error>(())
+/// ```
+pub struct StreamDecoder {
+    parser: Parser,
+    events: Vec<Event>,
+    limits: Limits,
+    header: Option<Header>,
+    seq: Option<Quasicrystal>,
+    sites: Vec<Point>,
+    /// Decoded colours of the available samples, `channels` bytes each.
+    colours: Vec<u8>,
+    verified: u64,
+    levels_complete: u32,
+    unpacker: Option<RawUnpacker>,
+    set: Option<SampleSet>,
+    stopped: Option<FormatError>,
+    metadata: Vec<Metadata>,
+}
+
+impl StreamDecoder {
+    /// A decoder enforcing `limits`; a format error after the header fails the push.
+    pub fn new(limits: Limits) -> Self {
+        Self::with_options(ParserOptions::with_limits(limits))
+    }
+
+    /// A decoder with parser options: `recover(true)` keeps the longest verified prefix of a
+    /// damaged file instead of failing (see [`StreamDecoder::stopped`]).
+    pub fn with_options(opts: ParserOptions) -> Self {
+        StreamDecoder {
+            limits: opts.limits.clone(),
+            parser: Parser::new(opts),
+            events: Vec::new(),
+            header: None,
+            seq: None,
+            sites: Vec::new(),
+            colours: Vec::new(),
+            verified: 0,
+            levels_complete: 0,
+            unpacker: None,
+            set: None,
+            stopped: None,
+            metadata: Vec::new(),
+        }
+    }
+
+    /// Feeds the next bytes of the file (any length, including 0).
+    ///
+    /// Running out of bytes is never an error. A damaged file is an error (the decoder is
+    /// then poisoned), unless recovery was asked for.
+    pub fn push(&mut self, bytes: &[u8]) -> Result<()> {
+        self.events.clear();
+        let r = self.parser.push(bytes, &mut self.events);
+        let events = std::mem::take(&mut self.events);
+        for e in &events {
+            self.apply(e)?;
+        }
+        self.events = events;
+        r
+    }
+
+    fn apply(&mut self, e: &Event) -> Result<()> {
+        match e {
+            Event::Header(h) => {
+                let frame = match h.lattice {
+                    Some(l) => Frame { root_len: l.root_length, origin: [l.origin_x, l.origin_y] },
+                    None => Frame::default_for(h.width, h.height),
+                };
+                let seq = Quasicrystal::with_frame(h.width, h.height, frame)
+                    .map_err(|e| Error::Parameter(format!("unusable site frame: {e}")))?;
+                if h.total_samples > h.width as u64 * h.height as u64 {
+                    return Err(Error::Format(FormatError::TooManySamples {
+                        samples: h.total_samples,
+                        pixels: h.width as u64 * h.height as u64,
+                    }));
+                }
+                self.seq = Some(seq);
+                self.header = Some(h.clone());
+            }
+            Event::LevelStart { samples, .. } => {
+                let h = self.header.as_ref().expect("header precedes levels");
+                self.unpacker = match h.coding {
+                    Coding::Raw { bits } => {
+                        Some(RawUnpacker::new(h.layout.channels(), bits, samples.end - samples.start)?)
+                    }
+                    Coding::Predictive { .. } => {
+                        return Err(Error::Parameter("the predictive coding is not supported yet".into()))
+                    }
+                };
+            }
+            Event::LevelData { bytes, .. } => {
+                if let Some(u) = &mut self.unpacker {
+                    u.push(bytes, &mut self.colours);
+                }
+            }
+            Event::LevelVerified { .. } => {
+                self.levels_complete += 1;
+                self.verified = self.sample_count();
+                self.unpacker = None;
+            }
+            Event::Stopped { error } => {
+                let c = self.channels();
+                self.colours.truncate(self.verified as usize * c);
+                self.unpacker = None;
+                self.stopped = Some(error.clone());
+            }
+            Event::Metadata { metadata, .. } => self.metadata.push(metadata.clone()),
+            Event::LevelsComplete | Event::Skipped { .. } => {}
+        }
+        Ok(())
+    }
+
+    fn channels(&self) -> usize {
+        self.header.as_ref().map_or(1, |h| h.layout.channels() as usize)
+    }
+
+    fn sample_count(&self) -> u64 {
+        (self.colours.len() / self.channels()) as u64
+    }
+
+    /// The header, once it has arrived complete and verified.
+    pub fn header(&self) -> Option<&Header> {
+        self.header.as_ref()
+    }
+
+    /// Samples whose bytes have all arrived (verified or not).
+    pub fn samples_available(&self) -> u64 {
+        self.sample_count()
+    }
+
+    /// Samples verified by their chunk's CRC.
+    pub fn samples_verified(&self) -> u64 {
+        self.verified
+    }
+
+    /// Levels received completely and verified.
+    pub fn levels_complete(&self) -> u32 {
+        self.levels_complete
+    }
+
+    /// Whether every sample of the file has arrived and is verified.
+    pub fn is_complete(&self) -> bool {
+        self.header.as_ref().is_some_and(|h| self.verified == h.total_samples)
+    }
+
+    /// In recovery mode, the error that stopped decoding (everything verified before it is kept).
+    pub fn stopped(&self) -> Option<&FormatError> {
+        self.stopped.as_ref()
+    }
+
+    /// Metadata chunks (ICC profile, text) received so far.
+    pub fn metadata(&self) -> &[Metadata] {
+        &self.metadata
+    }
+
+    /// Positions (source pixels) and colours of the first `k` available samples.
+    fn samples(&mut self, k: u64) -> (&[Point], &[u8]) {
+        let k = k.min(self.sample_count()) as usize;
+        if self.sites.len() < k {
+            let seq = self.seq.expect("samples imply a header");
+            let total = self.header.as_ref().map_or(0, |h| h.total_samples) as usize;
+            // Grow geometrically: total work stays O(n log n) however the bytes arrive.
+            let target = k.max(2 * self.sites.len()).min(total).max(k);
+            self.sites = seq.first(target).into_iter().map(|s| s.pos).collect();
+        }
+        let c = self.channels();
+        (&self.sites[..k], &self.colours[..k * c])
+    }
+
+    /// Renders the picture from every sample received so far, at `width × height`.
+    ///
+    /// Before the header is complete this is [`Error::NeedMoreData`].
+    pub fn render(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
+        let h = self.header.clone().ok_or(Error::NeedMoreData)?;
+        self.limits.check_output(width as u64, height as u64)?;
+        if width == 0 || height == 0 {
+            return Err(Error::Parameter(format!("output size {width}×{height} is empty")));
+        }
+        let n = self.sample_count();
+        let c = self.channels();
+        let mut set = self.set.take().unwrap_or_else(|| SampleSet::new(h.width, h.height, c));
+        let have = set.len();
+        let (pos, col) = self.samples(n);
+        for k in have..n as usize {
+            set.push(pos[k], &col[k * c..k * c + c]);
+        }
+        let pixels = set.render(method, width, height);
+        self.set = Some(set);
+        let decoded = DecodedImage {
+            image: to_image(h.layout, width, height, pixels),
+            samples_used: n,
+            samples_verified: self.verified.min(n),
+            levels_complete: self.levels_complete,
+            is_final: self.is_complete(),
+        };
+        Ok(if decoded.is_final { Picture::Final(decoded) } else { Picture::Preview(decoded) })
+    }
+
+    /// Renders from the first `k` available samples only (a fresh set, not the kept one).
+    fn render_prefix(&mut self, k: u64, method: Method, width: u32, height: u32) -> Result<DecodedImage> {
+        let h = self.header.clone().ok_or(Error::NeedMoreData)?;
+        self.limits.check_output(width as u64, height as u64)?;
+        if width == 0 || height == 0 {
+            return Err(Error::Parameter(format!("output size {width}×{height} is empty")));
+        }
+        let c = self.channels();
+        let (pos, col) = self.samples(k);
+        let used = pos.len() as u64;
+        let pixels = crate::reconstruction::render((h.width, h.height), c, pos, col, method, width, height);
+        Ok(DecodedImage {
+            image: to_image(h.layout, width, height, pixels),
+            samples_used: used,
+            samples_verified: self.verified.min(used),
+            levels_complete: self.levels_complete,
+            is_final: used == h.total_samples && self.verified == h.total_samples,
+        })
+    }
+}
+
+fn to_image(layout: Layout, w: u32, h: u32, px: Vec<u8>) -> DynamicImage {
+    let bad = "render returns w×h×channels bytes";
+    match layout {
+        Layout::Grey => DynamicImage::ImageLuma8(image::GrayImage::from_raw(w, h, px).expect(bad)),
+        Layout::GreyAlpha => DynamicImage::ImageLumaA8(image::GrayAlphaImage::from_raw(w, h, px).expect(bad)),
+        Layout::Rgb => DynamicImage::ImageRgb8(image::RgbImage::from_raw(w, h, px).expect(bad)),
+        Layout::Rgba => DynamicImage::ImageRgba8(image::RgbaImage::from_raw(w, h, px).expect(bad)),
+    }
+}
+
+/// How to decode a whole buffer.
+///
+/// ```
+/// let opts = qcs::DecodeOptions { size: Some((100, 50)), max_bytes: Some(200), ..Default::default() };
+/// assert_eq!(opts.method, qcs::Method::Gouraud);
+/// ```
+#[derive(Clone, Debug)]
+pub struct DecodeOptions {
+    /// Reconstruction method (default Gouraud).
+    pub method: Method,
+    /// Output size; `None` for the image's own size.
+    pub size: Option<(u32, u32)>,
+    /// Use at most this many samples.
+    pub max_samples: Option<u64>,
+    /// Use only the first this many bytes, as a cut download would.
+    pub max_bytes: Option<usize>,
+    /// Resource limits.
+    pub limits: Limits,
+    /// Return the longest verified prefix of a damaged file instead of an error.
+    pub recover: bool,
+}
+
+impl Default for DecodeOptions {
+    fn default() -> Self {
+        DecodeOptions {
+            method: Method::Gouraud,
+            size: None,
+            max_samples: None,
+            max_bytes: None,
+            limits: Limits::default(),
+            recover: false,
+        }
+    }
+}
+
+/// Decodes a `.qcs` buffer (or any prefix of one) to a picture.
+///
+/// A prefix that ends inside the header is [`Error::NeedMoreData`]; any longer prefix is a
+/// picture ([`DecodedImage::is_final`] says whether it is the whole file).
+///
+/// ```
+/// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(30, 20, |x, _| image::Luma([x as u8 * 8])));
+/// let bytes = qcs::encode(&img, &Default::default())?;
+/// let cut = qcs::decode(&bytes, &qcs::DecodeOptions { max_bytes: Some(bytes.len() - 10), ..Default::default() })?;
+/// assert!(!cut.is_final && cut.samples_used > 0);
+/// assert!(matches!(qcs::decode(&bytes[..5], &Default::default()), Err(qcs::Error::NeedMoreData)));
+/// # Ok::<(), qcs::Error>(())
+/// ```
+pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
+    let bytes = &bytes[..opts.max_bytes.unwrap_or(usize::MAX).min(bytes.len())];
+    let mut dec = StreamDecoder::with_options(ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover));
+    dec.push(bytes)?;
+    let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
+    let (w, ht) = opts.size.unwrap_or((h.width, h.height));
+    let k = opts.max_samples.unwrap_or(u64::MAX).min(dec.samples_available());
+    dec.render_prefix(k, opts.method, w, ht)
+}

@@ -1,0 +1,140 @@
+//! Image → `.qcs` bytes: sites, sample colours, colour coding, container.
+
+use crate::container::{Coding, ContainerWriter, Header, LatticeFields, Layout};
+use crate::sampling::{SampleColour, SourceImage};
+use crate::sites::{Frame, Quasicrystal};
+use crate::{Error, Result};
+use image::DynamicImage;
+use std::io::Write;
+
+/// How to encode an image.
+///
+/// ```
+/// let opts = qcs::EncodeOptions { samples: Some(5000), ..Default::default() };
+/// assert_eq!(opts.sample_count(512, 512), 5000);
+/// assert_eq!(qcs::EncodeOptions::default().sample_count(512, 512), 32768);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct EncodeOptions {
+    /// Total samples N; `None` uses `density`.
+    pub samples: Option<u64>,
+    /// Samples per pixel when `samples` is `None` (default 1/8).
+    pub density: f64,
+    /// The colour coding (default: raw, 8 bits per channel).
+    pub coding: Coding,
+    /// What a sample's colour is.
+    pub colour: SampleColour,
+    /// Samples in the first level (each later level doubles the count). Default 8.
+    pub first_level: u64,
+    /// Lattice placement; `None` for the default frame of spec/sites.md.
+    pub frame: Option<Frame>,
+    /// ICC profile to store (after the first level).
+    pub icc: Option<Vec<u8>>,
+    /// Text comments to store (after the first level).
+    pub text: Vec<(String, String)>,
+}
+
+impl Default for EncodeOptions {
+    fn default() -> Self {
+        EncodeOptions {
+            samples: None,
+            density: 0.125,
+            coding: Coding::Raw { bits: 8 },
+            colour: SampleColour::default(),
+            first_level: 8,
+            frame: None,
+            icc: None,
+            text: Vec::new(),
+        }
+    }
+}
+
+impl EncodeOptions {
+    /// The sample count N these options give for a `width × height` image (1 ≤ N ≤ W·H).
+    pub fn sample_count(&self, width: u32, height: u32) -> u64 {
+        let px = width as u64 * height as u64;
+        let n = match self.samples {
+            Some(n) => n,
+            None => (self.density * px as f64).round() as u64,
+        };
+        n.clamp(1, px.max(1))
+    }
+}
+
+/// The layout qcs stores for an image, and its pixels in that layout.
+fn layout_and_pixels(image: &DynamicImage) -> (Layout, Vec<u8>) {
+    match image {
+        DynamicImage::ImageLuma8(i) => (Layout::Grey, i.as_raw().clone()),
+        DynamicImage::ImageLumaA8(i) => (Layout::GreyAlpha, i.as_raw().clone()),
+        DynamicImage::ImageRgb8(i) => (Layout::Rgb, i.as_raw().clone()),
+        DynamicImage::ImageRgba8(i) => (Layout::Rgba, i.as_raw().clone()),
+        other => match (other.color().has_color(), other.color().has_alpha()) {
+            (true, true) => (Layout::Rgba, other.to_rgba8().into_raw()),
+            (true, false) => (Layout::Rgb, other.to_rgb8().into_raw()),
+            (false, true) => (Layout::GreyAlpha, other.to_luma_alpha8().into_raw()),
+            (false, false) => (Layout::Grey, other.to_luma8().into_raw()),
+        },
+    }
+}
+
+/// Encodes an image to `.qcs` bytes.
+///
+/// ```
+/// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(40, 30, image::Rgb([200, 100, 50])));
+/// let bytes = qcs::encode(&img, &qcs::EncodeOptions { samples: Some(300), ..Default::default() })?;
+/// let back = qcs::decode(&bytes, &qcs::DecodeOptions::default())?;
+/// assert!(back.is_final);
+/// assert_eq!(back.image.to_rgb8().get_pixel(20, 15).0, [200, 100, 50]);
+/// # Ok::<(), qcs::Error>(())
+/// ```
+pub fn encode(image: &DynamicImage, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    encode_to(image, opts, &mut out)?;
+    Ok(out)
+}
+
+/// Encodes an image to any writer.
+pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W) -> Result<()> {
+    let (width, height) = (image.width(), image.height());
+    let frame = opts.frame.unwrap_or_else(|| Frame::default_for(width, height));
+    let seq = Quasicrystal::with_frame(width, height, frame).map_err(|e| Error::Parameter(e.to_string()))?;
+    if opts.first_level == 0 {
+        return Err(Error::Parameter("the first level must hold at least one sample".into()));
+    }
+    let n = opts.sample_count(width, height);
+    let (layout, pixels) = layout_and_pixels(image);
+    let channels = layout.channels() as usize;
+    let mut header = Header::new(width, height, layout, n, opts.first_level, opts.coding.clone());
+    if opts.frame.is_some() {
+        header.lattice = Some(LatticeFields {
+            root_length: frame.root_len,
+            origin_x: frame.origin[0],
+            origin_y: frame.origin[1],
+        });
+    }
+    let positions: Vec<_> = seq.first(n as usize).into_iter().map(|s| s.pos).collect();
+    let source = SourceImage::new(&pixels, width, height, channels);
+    let colours = source.colours(&positions, opts.colour, n as usize);
+    let mut w = ContainerWriter::new(writer, &header)?;
+    for k in 0..header.level_count() {
+        let range = header.level_range(k).expect("level below level_count");
+        let values = &colours[range.start as usize * channels..range.end as usize * channels];
+        let payload = match &opts.coding {
+            Coding::Raw { bits } => crate::coding::raw::pack(values, *bits)?,
+            Coding::Predictive { .. } => {
+                return Err(Error::Parameter("the predictive coding is not available yet".into()))
+            }
+        };
+        w.write_level(&payload)?;
+        if k == 0 {
+            if let Some(icc) = &opts.icc {
+                w.write_icc(icc)?;
+            }
+            for (key, value) in &opts.text {
+                w.write_text(key, value)?;
+            }
+        }
+    }
+    w.finish()?;
+    Ok(())
+}
