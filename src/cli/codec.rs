@@ -1,0 +1,414 @@
+//! `qcs encode`, `qcs decode`, `qcs info`, `qcs demo`.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use qcs::container::Coding;
+use qcs::sampling::SampleColour;
+use qcs::{DecodeOptions, EncodeOptions, Method, StreamDecoder};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MethodArg {
+    Gouraud,
+    Shepard,
+    Natural,
+}
+
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Method {
+        match m {
+            MethodArg::Gouraud => Method::Gouraud,
+            MethodArg::Shepard => Method::Shepard,
+            MethodArg::Natural => Method::Natural,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ColourArg {
+    Nearest,
+    Bilinear,
+    Area,
+    Progressive,
+}
+
+#[derive(Args, Debug)]
+pub struct EncodeArgs {
+    /// Input image(s) or directories, then the output .qcs when encoding one file without --out-dir.
+    #[arg(required = true, num_args = 1..)]
+    pub paths: Vec<PathBuf>,
+    /// Encode every input into this directory (as NAME.qcs), in parallel.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    /// Total number of samples.
+    #[arg(long, conflicts_with = "density")]
+    pub samples: Option<u64>,
+    /// Samples per pixel (default 0.125).
+    #[arg(long)]
+    pub density: Option<f64>,
+    /// Bits per channel of the raw coding, 1–8.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(1..=8))]
+    pub bits: u8,
+    /// What a sample's colour is.
+    #[arg(long, value_enum, default_value = "progressive")]
+    pub colour: ColourArg,
+    /// Text comment to store.
+    #[arg(long)]
+    pub comment: Option<String>,
+}
+
+impl EncodeArgs {
+    fn options(&self) -> EncodeOptions {
+        let mut o = EncodeOptions { samples: self.samples, coding: Coding::Raw { bits: self.bits }, ..Default::default() };
+        if let Some(d) = self.density {
+            o.density = d;
+        }
+        o.colour = match self.colour {
+            ColourArg::Nearest => SampleColour::Nearest,
+            ColourArg::Bilinear => SampleColour::Bilinear,
+            ColourArg::Area => SampleColour::Area,
+            ColourArg::Progressive => SampleColour::Progressive,
+        };
+        if let Some(c) = &self.comment {
+            o.text.push(("Comment".into(), c.clone()));
+        }
+        o
+    }
+}
+
+fn encode_file(input: &Path, output: &Path, opts: &EncodeOptions) -> Result<(u64, u64)> {
+    let img = image::open(input).with_context(|| format!("cannot read image {}", input.display()))?;
+    let bytes = qcs::encode(&img, opts).with_context(|| format!("cannot encode {}", input.display()))?;
+    std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
+    Ok((std::fs::metadata(input).map(|m| m.len()).unwrap_or(0), bytes.len() as u64))
+}
+
+fn is_image(p: &Path) -> bool {
+    let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    image::ImageFormat::from_extension(&ext).is_some()
+}
+
+pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
+    let opts = a.options();
+    let Some(dir) = &a.out_dir else {
+        if a.paths.len() != 2 {
+            bail!("give one input and one output (IN OUT.qcs), or use --out-dir DIR for many inputs");
+        }
+        let (i, o) = encode_file(&a.paths[0], &a.paths[1], &opts)?;
+        if !quiet {
+            eprintln!("{} → {}: {} → {} bytes", a.paths[0].display(), a.paths[1].display(), i, o);
+        }
+        return Ok(());
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut inputs = Vec::new();
+    for p in &a.paths {
+        if p.is_dir() {
+            let mut v: Vec<PathBuf> = std::fs::read_dir(p)
+                .with_context(|| format!("cannot list {}", p.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file() && is_image(p))
+                .collect();
+            v.sort();
+            inputs.extend(v);
+        } else {
+            inputs.push(p.clone());
+        }
+    }
+    let start = Instant::now();
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(inputs.len() as u64) };
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}").expect("valid template"));
+    let results: Vec<Result<(u64, u64)>> = inputs
+        .par_iter()
+        .map(|p| {
+            let stem = p.file_stem().map(|s| s.to_os_string()).unwrap_or_default();
+            let out = dir.join(stem).with_extension("qcs");
+            let r = encode_file(p, &out, &opts);
+            bar.inc(1);
+            r
+        })
+        .collect();
+    bar.finish_and_clear();
+    let (mut ok, mut bin, mut bout) = (0, 0, 0);
+    let mut first_err = None;
+    for (p, r) in inputs.iter().zip(results) {
+        match r {
+            Ok((i, o)) => {
+                ok += 1;
+                bin += i;
+                bout += o;
+            }
+            Err(e) => {
+                eprintln!("qcs: {}: {e:#}", p.display());
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    if !quiet {
+        eprintln!(
+            "{ok} of {} files encoded, {bin} bytes in, {bout} bytes out, {:.2} s",
+            inputs.len(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    match first_err {
+        Some(e) => Err(e.context(format!("{} of {} files failed", inputs.len() - ok, inputs.len()))),
+        None => Ok(()),
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct DecodeArgs {
+    /// The .qcs file.
+    pub input: PathBuf,
+    /// The output image (PNG, JPEG, … by extension); optional with --frames.
+    pub output: Option<PathBuf>,
+    /// Reconstruction method.
+    #[arg(long, value_enum, default_value = "gouraud")]
+    pub method: MethodArg,
+    /// Output size WxH (default: the image's own size).
+    #[arg(long, value_parser = super::parse_size, conflicts_with = "scale")]
+    pub size: Option<(u32, u32)>,
+    /// Output scale factor.
+    #[arg(long)]
+    pub scale: Option<f64>,
+    /// Use at most N samples.
+    #[arg(long, conflicts_with = "bytes")]
+    pub samples: Option<u64>,
+    /// Use only the first K bytes of the file, as a cut download would.
+    #[arg(long)]
+    pub bytes: Option<usize>,
+    /// Write a preview PNG into DIR every --every bytes (default: at each level).
+    #[arg(long)]
+    pub frames: Option<PathBuf>,
+    /// With --frames: bytes between previews.
+    #[arg(long, requires = "frames")]
+    pub every: Option<usize>,
+    /// Return the longest verified prefix of a damaged file instead of failing.
+    #[arg(long)]
+    pub recover: bool,
+}
+
+fn output_size(size: Option<(u32, u32)>, scale: Option<f64>, w: u32, h: u32) -> Result<(u32, u32)> {
+    if let Some(s) = size {
+        return Ok(s);
+    }
+    let f = scale.unwrap_or(1.0);
+    if !(f > 0.0 && f.is_finite()) {
+        bail!("--scale must be positive");
+    }
+    Ok((((w as f64 * f).round() as u32).max(1), ((h as f64 * f).round() as u32).max(1)))
+}
+
+fn read(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
+}
+
+pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
+    let bytes = read(&a.input)?;
+    let ctx = || format!("cannot decode {}", a.input.display());
+    if let Some(dir) = &a.frames {
+        frames(&a, &bytes, dir, quiet).with_context(ctx)?;
+        if a.output.is_none() {
+            return Ok(());
+        }
+    }
+    let Some(out) = &a.output else { bail!("give an output image path (or --frames DIR)") };
+    let header = {
+        let mut d = StreamDecoder::new(qcs::Limits::default());
+        d.push(&bytes[..bytes.len().min(qcs::container::MAX_HEADER_LEN)]).with_context(ctx)?;
+        d.header().cloned().ok_or(qcs::Error::NeedMoreData).with_context(ctx)?
+    };
+    let size = output_size(a.size, a.scale, header.width, header.height)?;
+    let opts = DecodeOptions {
+        method: a.method.into(),
+        size: Some(size),
+        max_samples: a.samples,
+        max_bytes: a.bytes,
+        recover: a.recover,
+        ..Default::default()
+    };
+    let d = qcs::decode(&bytes, &opts).with_context(ctx)?;
+    d.image.save(out).with_context(|| format!("cannot write {}", out.display()))?;
+    if !quiet {
+        eprintln!(
+            "{}: {}×{} from {} samples ({} verified, {} levels){}",
+            out.display(),
+            size.0,
+            size.1,
+            d.samples_used,
+            d.samples_verified,
+            d.levels_complete,
+            if d.is_final { ", final" } else { ", preview" }
+        );
+    }
+    Ok(())
+}
+
+fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut dec = StreamDecoder::with_options(qcs::container::ParserOptions::with_limits(qcs::Limits::default()).recover(a.recover));
+    let mut cuts: Vec<usize> = match a.every {
+        Some(k) if k > 0 => (1..).map(|i| i * k).take_while(|&c| c < bytes.len()).collect(),
+        Some(_) => bail!("--every must be positive"),
+        None => level_ends(bytes),
+    };
+    cuts.push(bytes.len());
+    cuts.dedup();
+    let mut fed = 0;
+    let mut n = 0;
+    for cut in cuts {
+        dec.push(&bytes[fed..cut])?;
+        fed = cut;
+        let Some(h) = dec.header().cloned() else { continue };
+        let size = output_size(a.size, a.scale, h.width, h.height)?;
+        let pic = dec.render(a.method.into(), size.0, size.1)?;
+        let kind = if pic.is_final() { "final" } else { "preview" };
+        let path = dir.join(format!("frame-{n:03}-{cut:08}B-{kind}.png"));
+        pic.decoded().image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        if !quiet {
+            eprintln!("{}: {} samples", path.display(), pic.decoded().samples_used);
+        }
+        n += 1;
+    }
+    Ok(())
+}
+
+/// Byte offsets at which each level chunk ends (where the next chunk starts).
+fn level_ends(bytes: &[u8]) -> Vec<usize> {
+    let ins = qcs::container::inspect(bytes);
+    let starts: Vec<u64> = ins.chunks.iter().map(|c| c.chunk.offset).chain([ins.file_len]).collect();
+    ins.chunks
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.level.is_some())
+        .map(|(i, _)| starts[i + 1] as usize)
+        .collect()
+}
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// The .qcs file.
+    pub input: PathBuf,
+}
+
+pub fn info(a: InfoArgs) -> Result<()> {
+    let bytes = read(&a.input)?;
+    let ins = qcs::container::inspect(&bytes);
+    println!("file: {} ({} bytes)", a.input.display(), ins.file_len);
+    if let Some(h) = &ins.header {
+        println!("version 1, {}×{} {:?}, {} samples, first level {}", h.width, h.height, h.layout, h.total_samples, h.first_level);
+        println!("coding: {:?}", h.coding);
+        match h.lattice {
+            Some(l) => println!(
+                "lattice: root {} px, origin ({}, {}) px",
+                l.root_length as f64 / 65536.0,
+                l.origin_x as f64 / 65536.0,
+                l.origin_y as f64 / 65536.0
+            ),
+            None => println!("lattice: default (1 px per root, origin at (-W/2, -H/3))"),
+        }
+        println!("header: {} bytes, CRC ok", ins.header_len.unwrap_or(0));
+    }
+    println!("{:>5} {:>5} {:>10} {:>19} {:>9} {:>9}  status", "chunk", "tag", "offset", "samples", "payload", "present");
+    for c in &ins.chunks {
+        let lvl = c.level.and_then(|k| ins.levels.get(k as usize));
+        let samples = lvl.map_or(String::from("-"), |l| format!("{}..{}", l.samples.start, l.samples.end));
+        let present = lvl.map_or(String::from("-"), |l| l.payload_present.to_string());
+        let status = match &c.status {
+            qcs::container::ChunkStatus::Verified => "CRC ok".to_string(),
+            qcs::container::ChunkStatus::Truncated => "truncated".to_string(),
+            qcs::container::ChunkStatus::Bad(e) => format!("BAD: {e}"),
+        };
+        println!(
+            "{:>5} {:>5} {:>10} {:>19} {:>9} {:>9}  {}",
+            c.chunk.index,
+            qcs::container::chunk::tag_name(c.chunk.tag),
+            c.chunk.offset,
+            samples,
+            c.payload_len.map_or(String::from("?"), |l| l.to_string()),
+            present,
+            status
+        );
+    }
+    let missing = ins.levels.iter().filter(|l| l.chunk.is_none()).count();
+    if missing > 0 {
+        println!("{missing} level(s) not in the file");
+    }
+    for m in &ins.metadata {
+        match m {
+            qcs::container::Metadata::Icc(p) => println!("ICC profile: {} bytes", p.len()),
+            qcs::container::Metadata::Text { key, value } => println!("text: {key} = {value}"),
+        }
+    }
+    println!("samples: {} available, {} verified; end: {:?}", ins.samples_available, ins.samples_verified, ins.end);
+    if let Some(e) = ins.error {
+        return Err(e).with_context(|| format!("{} is damaged", a.input.display()));
+    }
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+pub struct DemoArgs {
+    /// An image to encode.
+    pub input: PathBuf,
+    /// Directory for the .qcs file and the previews.
+    pub out_dir: PathBuf,
+    /// Total number of samples (default: one per 8 pixels).
+    #[arg(long)]
+    pub samples: Option<u64>,
+}
+
+pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
+    std::fs::create_dir_all(&a.out_dir).with_context(|| format!("cannot create {}", a.out_dir.display()))?;
+    let img = image::open(&a.input).with_context(|| format!("cannot read image {}", a.input.display()))?;
+    let opts = EncodeOptions { samples: a.samples, ..Default::default() };
+    let bytes = qcs::encode(&img, &opts)?;
+    let stem = a.input.file_stem().and_then(|s| s.to_str()).unwrap_or("image").to_string();
+    let qcs_path = a.out_dir.join(format!("{stem}.qcs"));
+    std::fs::write(&qcs_path, &bytes).with_context(|| format!("cannot write {}", qcs_path.display()))?;
+    let reference = img.to_rgb8();
+    let (w, h) = reference.dimensions();
+    let mut strip = image::RgbImage::new(w * 4, h);
+    if !quiet {
+        println!("{}: {} bytes ({} samples)", qcs_path.display(), bytes.len(), opts.sample_count(w, h));
+        println!("{:>7} {:>8} {:>8} {:>8}  file", "share", "bytes", "samples", "PSNR dB");
+    }
+    for (i, pct) in [1usize, 5, 25, 100].into_iter().enumerate() {
+        let cut = (bytes.len() * pct).div_ceil(100);
+        let d = qcs::decode(&bytes, &DecodeOptions { max_bytes: Some(cut), ..Default::default() })?;
+        let rgb = d.image.to_rgb8();
+        let path = a.out_dir.join(format!("{stem}-{pct:03}pct.png"));
+        rgb.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        image::imageops::replace(&mut strip, &rgb, (i as u32 * w) as i64, 0);
+        if !quiet {
+            println!(
+                "{:>6}% {:>8} {:>8} {:>8.2}  {}",
+                pct,
+                cut,
+                d.samples_used,
+                psnr(&reference, &rgb),
+                path.display()
+            );
+        }
+    }
+    let path = a.out_dir.join(format!("{stem}-strip.png"));
+    strip.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+    if !quiet {
+        println!("side by side: {}", path.display());
+    }
+    Ok(())
+}
+
+fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
+    let se: f64 = a.as_raw().iter().zip(b.as_raw()).map(|(&x, &y)| (x as f64 - y as f64).powi(2)).sum();
+    let mse = se / a.as_raw().len() as f64;
+    if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (255.0f64 * 255.0 / mse).log10()
+    }
+}
