@@ -932,3 +932,46 @@ fn parsed_level_data_decodes_to_quantised_colours() {
         chunk_by_hand(b'L', &level_payload(0))
     );
 }
+
+#[test]
+fn spec_worked_example() {
+    // The example file of spec/format.md §Worked example, byte for byte.
+    let file: Vec<u8> = [
+        "71 63 73 01 00 02 02 01 03 02 00 01 08 6e cc 57 5b",
+        "4c 02 80 40 2c 35 5d be",
+        "74 03 6b 00 76 34 ee 21 25",
+        "4c 01 c0 47 5e be 04",
+    ]
+    .join(" ")
+    .split(' ')
+    .map(|h| u8::from_str_radix(h, 16).unwrap())
+    .collect();
+    let header = Header::new(2, 2, Layout::Grey, 3, 2, Coding::Raw { bits: 8 });
+    let mut w = ContainerWriter::new(Vec::new(), &header).unwrap();
+    w.write_level(&[128, 64]).unwrap();
+    w.write_text("k", "v").unwrap();
+    w.write_level(&[192]).unwrap();
+    assert_eq!(w.finish().unwrap(), file);
+    let (p, _, r) = parse_all(&file, Default::default());
+    r.unwrap();
+    assert!(p.is_complete());
+    let pr = parse_all(&file[..20], Default::default()).0.progress();
+    assert_eq!((pr.samples_verified, pr.samples_available), (0, 1));
+    let pr = parse_all(&file[..25], Default::default()).0.progress();
+    assert_eq!((pr.samples_verified, pr.samples_available), (2, 2));
+    // §Codings raw example: B = 5, RGB (10, 128, 255) → 0C 3E.
+    assert_eq!(raw::pack(&[10, 128, 255], 5).unwrap(), [0x0C, 0x3E]);
+    // §Conventions CRC check value and varint examples.
+    assert_eq!(crc32fast::hash(b"123456789"), 0xCBF4_3926);
+    for (v, bytes) in [
+        (0u64, &[0u8][..]),
+        (127, &[0x7F]),
+        (128, &[0x80, 0x01]),
+        (300, &[0xAC, 0x02]),
+        (65536, &[0x80, 0x80, 0x04]),
+    ] {
+        let mut out = Vec::new();
+        varint::write_u64(&mut out, v);
+        assert_eq!(out, bytes);
+    }
+}

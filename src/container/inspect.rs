@@ -77,10 +77,10 @@ pub struct Inspection {
 ///
 /// ```
 /// use qcs::container::{inspect, ContainerWriter, Header, Layout, Coding, ChunkStatus};
-/// let header = Header::new(3, 3, Layout::Grey, 3, 1, Coding::Raw { bits: 8 });
+/// let header = Header::new(3, 3, Layout::Grey, 4, 2, Coding::Raw { bits: 8 });
 /// let mut w = ContainerWriter::new(Vec::new(), &header)?;
-/// w.write_level(&[1])?;
-/// w.write_level(&[2, 3])?;
+/// w.write_level(&[1, 2])?;
+/// w.write_level(&[3, 4])?;
 /// let mut file = w.finish()?;
 /// file.truncate(file.len() - 5); // cut inside level 1
 /// let info = inspect(&file);
@@ -88,7 +88,7 @@ pub struct Inspection {
 /// assert_eq!(info.levels[0].status, Some(ChunkStatus::Verified));
 /// assert_eq!(info.levels[1].status, Some(ChunkStatus::Truncated));
 /// assert_eq!(info.levels[1].payload_present, 1);
-/// assert_eq!(info.samples_available, 2);
+/// assert_eq!(info.samples_available, 3);
 /// # Ok::<(), qcs::Error>(())
 /// ```
 pub fn inspect(bytes: &[u8]) -> Inspection {
