@@ -975,3 +975,93 @@ fn spec_worked_example() {
         assert_eq!(out, bytes);
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// RawDecoder: bytes → colours
+// ---------------------------------------------------------------------------------------------
+
+fn expected_colours() -> Vec<u8> {
+    sample_values()
+        .iter()
+        .map(|&v| raw::dequantise(raw::quantise(v, B), B))
+        .collect()
+}
+
+#[test]
+fn raw_decoder_every_prefix_and_byte_at_a_time() {
+    let (file, _) = test_file();
+    let all = expected_colours();
+    let mut streaming = raw::RawDecoder::new(Default::default());
+    for cut in 0..=file.len() {
+        let mut d = raw::RawDecoder::new(Default::default());
+        d.push(&file[..cut]).unwrap();
+        let p = d.parser().progress();
+        assert_eq!(d.samples_available(), p.samples_available, "cut {cut}");
+        assert_eq!(d.samples_verified(), p.samples_verified, "cut {cut}");
+        assert_eq!(d.colours(), &all[..d.colours().len()], "cut {cut}");
+        if cut > 0 {
+            streaming.push(&file[cut - 1..cut]).unwrap();
+        }
+        assert_eq!(streaming.colours(), d.colours(), "cut {cut}");
+    }
+    assert_eq!(streaming.colours(), all);
+    assert_eq!(streaming.metadata().len(), 2);
+    assert_eq!(streaming.end_state(), EndState::Complete);
+
+    let h = Header::new(
+        2,
+        2,
+        Layout::Grey,
+        4,
+        2,
+        Coding::Predictive { params: vec![7] },
+    );
+    let mut d = raw::RawDecoder::new(Default::default());
+    let r = d.push(&h.encode().unwrap());
+    assert!(matches!(
+        r,
+        Err(Error::Format(FormatError::UnsupportedCoding { coding: 1 }))
+    ));
+    assert!(d.push(&[]).is_err());
+}
+
+#[test]
+fn recovery_after_any_bit_flip_keeps_only_true_samples() {
+    // With recovery on, whatever bit is flipped after the header, the verified samples are
+    // exactly the original ones, and whole levels.
+    let (file, chunks) = test_file();
+    let all = expected_colours();
+    let hlen = header_bytes_by_hand().len();
+    let level_ends = [0u64, 2, 4, 7];
+    for byte in hlen..file.len() {
+        for bit in 0..8 {
+            let mut bad = file.clone();
+            bad[byte] ^= 1 << bit;
+            let mut d = raw::RawDecoder::new(ParserOptions::default().recover(true));
+            let r = d.push(&bad);
+            let what = format!("byte {byte} bit {bit}");
+            match r {
+                Ok(()) => {}
+                Err(Error::Limits(_)) => {}
+                Err(e) => panic!("{what}: {e}"),
+            }
+            let v = d.samples_verified();
+            assert!(level_ends.contains(&v), "{what}: {v}");
+            assert_eq!(
+                &d.colours()[..v as usize * CH],
+                &all[..v as usize * CH],
+                "{what}"
+            );
+            // A flip inside a level chunk loses that level and everything after it.
+            let i = chunks.iter().rposition(|c| c.1 <= byte).unwrap();
+            let levels_before = chunks[..i].iter().filter(|c| c.0 == b'L').count();
+            if chunks[i].0 == b'L' {
+                assert_eq!(v, level_ends[levels_before], "{what}");
+                assert_eq!(d.end_state(), EndState::Stopped, "{what}");
+                assert_eq!(d.samples_available(), v, "{what}");
+            } else {
+                assert!(v >= level_ends[levels_before], "{what}");
+            }
+        }
+    }
+}

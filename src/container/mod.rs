@@ -188,6 +188,12 @@ pub enum FormatError {
         /// The chunk.
         chunk: ChunkRef,
     },
+    /// The file uses a coding this decoder does not implement (e.g. the reserved predictive coding).
+    #[error("coding {coding} is not supported by this decoder")]
+    UnsupportedCoding {
+        /// The coding byte.
+        coding: u8,
+    },
     /// A text chunk that is not `key 0x00 value` in UTF-8 with a non-empty key.
     #[error("{chunk}: malformed text chunk: {reason}")]
     BadText {
