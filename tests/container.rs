@@ -1065,3 +1065,109 @@ fn recovery_after_any_bit_flip_keeps_only_true_samples() {
         }
     }
 }
+
+#[test]
+fn inspection_display() {
+    let (file, chunks) = test_file();
+    let text = inspect(&file).to_string();
+    assert!(
+        text.contains(
+            "header: 17 bytes, 5×4, Rgb (3 channels), 7 samples, first level 2, 3 levels"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!(
+            "level 2: samples 4..7, chunk #4 at byte {}, 6 payload bytes, CRC ok",
+            chunks[4].1
+        )),
+        "{text}"
+    );
+    assert!(text.contains("text: Title = quasi"), "{text}");
+    assert!(
+        text.contains("samples: 7 verified, 7 available; end: Complete"),
+        "{text}"
+    );
+    let text = inspect(&file[..chunks[2].1 + 4]).to_string();
+    assert!(text.contains("truncated (unverified)"), "{text}");
+    assert!(text.contains("level 2: samples 4..7, missing"), "{text}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// Arbitrary damage (byte changes, insertions, deletions) never panics, and the outcome does not
+    /// depend on how the bytes are split.
+    #[test]
+    fn damaged_files_never_panic(
+        edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>(), 0u8..3), 1..6),
+        split in any::<prop::sample::Index>(),
+    ) {
+        let (mut file, _) = test_file();
+        for (at, b, op) in edits {
+            let i = at.index(file.len());
+            match op {
+                0 => file[i] = b,
+                1 => file.insert(i, b),
+                _ => { file.remove(i); }
+            }
+        }
+        for recover in [false, true] {
+            let opts = ParserOptions::default().recover(recover);
+            let (p1, ev1, r1) = parse_all(&file, opts.clone());
+            let cut = split.index(file.len() + 1);
+            let mut p2 = Parser::new(opts);
+            let mut ev2 = Vec::new();
+            let r2 = p2.push(&file[..cut], &mut ev2).and_then(|_| p2.push(&file[cut..], &mut ev2));
+            prop_assert_eq!(r1.is_ok(), r2.is_ok());
+            prop_assert_eq!(normalise(ev1), normalise(ev2));
+            // After an error the byte count is unspecified; everything else must agree.
+            let (mut a, mut b) = (p1.progress(), p2.progress());
+            if r1.is_err() {
+                a.bytes_consumed = 0;
+                b.bytes_consumed = 0;
+            }
+            prop_assert_eq!(a, b);
+            prop_assert_eq!(p1.end_state(), p2.end_state());
+            let _ = inspect(&file).to_string();
+        }
+    }
+}
+
+/// Throughput figures for the report: `cargo test --release --test container -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn throughput() {
+    let n = 1u64 << 20;
+    let header = Header::new(1024, 1024, Layout::Rgb, n, 256, Coding::Raw { bits: 6 });
+    let values: Vec<u8> = (0..n * 3).map(|i| (i * 7 % 251) as u8).collect();
+    let t = std::time::Instant::now();
+    let mut w = ContainerWriter::new(Vec::new(), &header).unwrap();
+    for k in 0..header.level_count() {
+        let r = header.level_range(k).unwrap();
+        w.write_level(&raw::pack(&values[r.start as usize * 3..r.end as usize * 3], 6).unwrap())
+            .unwrap();
+    }
+    let file = w.finish().unwrap();
+    let enc = t.elapsed();
+    let t = std::time::Instant::now();
+    let mut d = raw::RawDecoder::new(Default::default());
+    d.push(&file).unwrap();
+    let dec = t.elapsed();
+    assert_eq!(d.samples_verified(), n);
+    let t = std::time::Instant::now();
+    let mut d = raw::RawDecoder::new(Default::default());
+    for c in file.chunks(1500) {
+        d.push(c).unwrap();
+    }
+    let dec_chunked = t.elapsed();
+    let mb = file.len() as f64 / 1e6;
+    println!(
+        "{} samples, {:.2} MB: pack+write {:.1} MB/s, decode whole {:.1} MB/s, decode in 1500-byte pushes {:.1} MB/s",
+        n,
+        mb,
+        mb / enc.as_secs_f64(),
+        mb / dec.as_secs_f64(),
+        mb / dec_chunked.as_secs_f64()
+    );
+}

@@ -112,7 +112,7 @@ pub enum Event {
 /// How far the parser has got.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Progress {
-    /// Bytes consumed from the start of the file.
+    /// Bytes consumed from the start of the file (unspecified after a fatal error).
     pub bytes_consumed: u64,
     /// Whether the header has been parsed and verified.
     pub header_complete: bool,
