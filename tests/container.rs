@@ -1171,3 +1171,37 @@ fn throughput() {
         mb / dec_chunked.as_secs_f64()
     );
 }
+
+#[test]
+fn predictive_coding_passes_through() {
+    // Coding 1: parameters passed through, level lengths free, availability = verified.
+    let h = Header::new(
+        4,
+        4,
+        Layout::Rgba,
+        3,
+        2,
+        Coding::Predictive {
+            params: vec![1, 2, 3],
+        },
+    );
+    let mut w = ContainerWriter::new(Vec::new(), &h).unwrap();
+    w.write_level(&[0xAA; 17]).unwrap();
+    w.write_level(&[]).unwrap();
+    let file = w.finish().unwrap();
+    let (p, ev, r) = parse_all(&file, Default::default());
+    r.unwrap();
+    assert!(p.is_complete());
+    assert_eq!(ev[0], Event::Header(h));
+    assert!(ev.iter().any(|e| matches!(
+        e,
+        Event::LevelStart {
+            level: 1,
+            payload_len: 0,
+            ..
+        }
+    )));
+    let (p, _, _) = parse_all(&file[..file.len() - 12], Default::default());
+    let pr = p.progress();
+    assert_eq!((pr.samples_verified, pr.samples_available), (0, 0));
+}

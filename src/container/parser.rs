@@ -8,6 +8,14 @@ use crate::Limits;
 use std::ops::Range;
 
 /// How a [`Parser`] treats limits and damage.
+///
+/// ```
+/// use qcs::container::ParserOptions;
+/// let mut limits = qcs::Limits::default();
+/// limits.max_samples = 1 << 16;
+/// let opts = ParserOptions::with_limits(limits).recover(true);
+/// assert!(opts.recover);
+/// ```
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct ParserOptions {
