@@ -932,3 +932,276 @@ fn parsed_level_data_decodes_to_quantised_colours() {
         chunk_by_hand(b'L', &level_payload(0))
     );
 }
+
+#[test]
+fn spec_worked_example() {
+    // The example file of spec/format.md §Worked example, byte for byte.
+    let file: Vec<u8> = [
+        "71 63 73 01 00 02 02 01 03 02 00 01 08 6e cc 57 5b",
+        "4c 02 80 40 2c 35 5d be",
+        "74 03 6b 00 76 34 ee 21 25",
+        "4c 01 c0 47 5e be 04",
+    ]
+    .join(" ")
+    .split(' ')
+    .map(|h| u8::from_str_radix(h, 16).unwrap())
+    .collect();
+    let header = Header::new(2, 2, Layout::Grey, 3, 2, Coding::Raw { bits: 8 });
+    let mut w = ContainerWriter::new(Vec::new(), &header).unwrap();
+    w.write_level(&[128, 64]).unwrap();
+    w.write_text("k", "v").unwrap();
+    w.write_level(&[192]).unwrap();
+    assert_eq!(w.finish().unwrap(), file);
+    let (p, _, r) = parse_all(&file, Default::default());
+    r.unwrap();
+    assert!(p.is_complete());
+    let pr = parse_all(&file[..20], Default::default()).0.progress();
+    assert_eq!((pr.samples_verified, pr.samples_available), (0, 1));
+    let pr = parse_all(&file[..25], Default::default()).0.progress();
+    assert_eq!((pr.samples_verified, pr.samples_available), (2, 2));
+    // §Codings raw example: B = 5, RGB (10, 128, 255) → 0C 3E.
+    assert_eq!(raw::pack(&[10, 128, 255], 5).unwrap(), [0x0C, 0x3E]);
+    // §Conventions CRC check value and varint examples.
+    assert_eq!(crc32fast::hash(b"123456789"), 0xCBF4_3926);
+    for (v, bytes) in [
+        (0u64, &[0u8][..]),
+        (127, &[0x7F]),
+        (128, &[0x80, 0x01]),
+        (300, &[0xAC, 0x02]),
+        (65536, &[0x80, 0x80, 0x04]),
+    ] {
+        let mut out = Vec::new();
+        varint::write_u64(&mut out, v);
+        assert_eq!(out, bytes);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// RawDecoder: bytes → colours
+// ---------------------------------------------------------------------------------------------
+
+fn expected_colours() -> Vec<u8> {
+    sample_values()
+        .iter()
+        .map(|&v| raw::dequantise(raw::quantise(v, B), B))
+        .collect()
+}
+
+#[test]
+fn raw_decoder_every_prefix_and_byte_at_a_time() {
+    let (file, _) = test_file();
+    let all = expected_colours();
+    let mut streaming = raw::RawDecoder::new(Default::default());
+    for cut in 0..=file.len() {
+        let mut d = raw::RawDecoder::new(Default::default());
+        d.push(&file[..cut]).unwrap();
+        let p = d.parser().progress();
+        assert_eq!(d.samples_available(), p.samples_available, "cut {cut}");
+        assert_eq!(d.samples_verified(), p.samples_verified, "cut {cut}");
+        assert_eq!(d.colours(), &all[..d.colours().len()], "cut {cut}");
+        if cut > 0 {
+            streaming.push(&file[cut - 1..cut]).unwrap();
+        }
+        assert_eq!(streaming.colours(), d.colours(), "cut {cut}");
+    }
+    assert_eq!(streaming.colours(), all);
+    assert_eq!(streaming.metadata().len(), 2);
+    assert_eq!(streaming.end_state(), EndState::Complete);
+
+    let h = Header::new(
+        2,
+        2,
+        Layout::Grey,
+        4,
+        2,
+        Coding::Predictive { params: vec![7] },
+    );
+    let mut d = raw::RawDecoder::new(Default::default());
+    let r = d.push(&h.encode().unwrap());
+    assert!(matches!(
+        r,
+        Err(Error::Format(FormatError::UnsupportedCoding { coding: 1 }))
+    ));
+    assert!(d.push(&[]).is_err());
+}
+
+#[test]
+fn recovery_after_any_bit_flip_keeps_only_true_samples() {
+    // With recovery on, whatever bit is flipped after the header, the verified samples are
+    // exactly the original ones, and whole levels.
+    let (file, chunks) = test_file();
+    let all = expected_colours();
+    let hlen = header_bytes_by_hand().len();
+    let level_ends = [0u64, 2, 4, 7];
+    for byte in hlen..file.len() {
+        for bit in 0..8 {
+            let mut bad = file.clone();
+            bad[byte] ^= 1 << bit;
+            let mut d = raw::RawDecoder::new(ParserOptions::default().recover(true));
+            let r = d.push(&bad);
+            let what = format!("byte {byte} bit {bit}");
+            match r {
+                Ok(()) => {}
+                Err(Error::Limits(_)) => {}
+                Err(e) => panic!("{what}: {e}"),
+            }
+            let v = d.samples_verified();
+            assert!(level_ends.contains(&v), "{what}: {v}");
+            assert_eq!(
+                &d.colours()[..v as usize * CH],
+                &all[..v as usize * CH],
+                "{what}"
+            );
+            // A flip inside a level chunk loses that level and everything after it.
+            let i = chunks.iter().rposition(|c| c.1 <= byte).unwrap();
+            let levels_before = chunks[..i].iter().filter(|c| c.0 == b'L').count();
+            if chunks[i].0 == b'L' {
+                assert_eq!(v, level_ends[levels_before], "{what}");
+                assert_eq!(d.end_state(), EndState::Stopped, "{what}");
+                assert_eq!(d.samples_available(), v, "{what}");
+            } else {
+                assert!(v >= level_ends[levels_before], "{what}");
+            }
+        }
+    }
+}
+
+#[test]
+fn inspection_display() {
+    let (file, chunks) = test_file();
+    let text = inspect(&file).to_string();
+    assert!(
+        text.contains(
+            "header: 17 bytes, 5×4, Rgb (3 channels), 7 samples, first level 2, 3 levels"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!(
+            "level 2: samples 4..7, chunk #4 at byte {}, 6 payload bytes, CRC ok",
+            chunks[4].1
+        )),
+        "{text}"
+    );
+    assert!(text.contains("text: Title = quasi"), "{text}");
+    assert!(
+        text.contains("samples: 7 verified, 7 available; end: Complete"),
+        "{text}"
+    );
+    let text = inspect(&file[..chunks[2].1 + 4]).to_string();
+    assert!(text.contains("truncated (unverified)"), "{text}");
+    assert!(text.contains("level 2: samples 4..7, missing"), "{text}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// Arbitrary damage (byte changes, insertions, deletions) never panics, and the outcome does not
+    /// depend on how the bytes are split.
+    #[test]
+    fn damaged_files_never_panic(
+        edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>(), 0u8..3), 1..6),
+        split in any::<prop::sample::Index>(),
+    ) {
+        let (mut file, _) = test_file();
+        for (at, b, op) in edits {
+            let i = at.index(file.len());
+            match op {
+                0 => file[i] = b,
+                1 => file.insert(i, b),
+                _ => { file.remove(i); }
+            }
+        }
+        for recover in [false, true] {
+            let opts = ParserOptions::default().recover(recover);
+            let (p1, ev1, r1) = parse_all(&file, opts.clone());
+            let cut = split.index(file.len() + 1);
+            let mut p2 = Parser::new(opts);
+            let mut ev2 = Vec::new();
+            let r2 = p2.push(&file[..cut], &mut ev2).and_then(|_| p2.push(&file[cut..], &mut ev2));
+            prop_assert_eq!(r1.is_ok(), r2.is_ok());
+            prop_assert_eq!(normalise(ev1), normalise(ev2));
+            // After an error the byte count is unspecified; everything else must agree.
+            let (mut a, mut b) = (p1.progress(), p2.progress());
+            if r1.is_err() {
+                a.bytes_consumed = 0;
+                b.bytes_consumed = 0;
+            }
+            prop_assert_eq!(a, b);
+            prop_assert_eq!(p1.end_state(), p2.end_state());
+            let _ = inspect(&file).to_string();
+        }
+    }
+}
+
+/// Throughput figures for the report: `cargo test --release --test container -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn throughput() {
+    let n = 1u64 << 20;
+    let header = Header::new(1024, 1024, Layout::Rgb, n, 256, Coding::Raw { bits: 6 });
+    let values: Vec<u8> = (0..n * 3).map(|i| (i * 7 % 251) as u8).collect();
+    let t = std::time::Instant::now();
+    let mut w = ContainerWriter::new(Vec::new(), &header).unwrap();
+    for k in 0..header.level_count() {
+        let r = header.level_range(k).unwrap();
+        w.write_level(&raw::pack(&values[r.start as usize * 3..r.end as usize * 3], 6).unwrap())
+            .unwrap();
+    }
+    let file = w.finish().unwrap();
+    let enc = t.elapsed();
+    let t = std::time::Instant::now();
+    let mut d = raw::RawDecoder::new(Default::default());
+    d.push(&file).unwrap();
+    let dec = t.elapsed();
+    assert_eq!(d.samples_verified(), n);
+    let t = std::time::Instant::now();
+    let mut d = raw::RawDecoder::new(Default::default());
+    for c in file.chunks(1500) {
+        d.push(c).unwrap();
+    }
+    let dec_chunked = t.elapsed();
+    let mb = file.len() as f64 / 1e6;
+    println!(
+        "{} samples, {:.2} MB: pack+write {:.1} MB/s, decode whole {:.1} MB/s, decode in 1500-byte pushes {:.1} MB/s",
+        n,
+        mb,
+        mb / enc.as_secs_f64(),
+        mb / dec.as_secs_f64(),
+        mb / dec_chunked.as_secs_f64()
+    );
+}
+
+#[test]
+fn predictive_coding_passes_through() {
+    // Coding 1: parameters passed through, level lengths free, availability = verified.
+    let h = Header::new(
+        4,
+        4,
+        Layout::Rgba,
+        3,
+        2,
+        Coding::Predictive {
+            params: vec![1, 2, 3],
+        },
+    );
+    let mut w = ContainerWriter::new(Vec::new(), &h).unwrap();
+    w.write_level(&[0xAA; 17]).unwrap();
+    w.write_level(&[]).unwrap();
+    let file = w.finish().unwrap();
+    let (p, ev, r) = parse_all(&file, Default::default());
+    r.unwrap();
+    assert!(p.is_complete());
+    assert_eq!(ev[0], Event::Header(h));
+    assert!(ev.iter().any(|e| matches!(
+        e,
+        Event::LevelStart {
+            level: 1,
+            payload_len: 0,
+            ..
+        }
+    )));
+    let (p, _, _) = parse_all(&file[..file.len() - 12], Default::default());
+    let pr = p.progress();
+    assert_eq!((pr.samples_verified, pr.samples_available), (0, 0));
+}

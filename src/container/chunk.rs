@@ -24,6 +24,12 @@ pub fn is_ancillary(tag: u8) -> bool {
 }
 
 /// A printable form of a tag: the ASCII character if it is graphic, else `0xNN`.
+///
+/// ```
+/// use qcs::container::chunk::tag_name;
+/// assert_eq!(tag_name(b'L'), "'L'");
+/// assert_eq!(tag_name(0), "0x00");
+/// ```
 pub fn tag_name(tag: u8) -> String {
     if tag.is_ascii_graphic() {
         format!("'{}'", tag as char)

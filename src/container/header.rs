@@ -71,6 +71,10 @@ pub enum Coding {
 
 impl Coding {
     /// The coding byte.
+    ///
+    /// ```
+    /// assert_eq!(qcs::container::Coding::Raw { bits: 4 }.id(), 0);
+    /// ```
     pub fn id(&self) -> u8 {
         match self {
             Coding::Raw { .. } => 0,
@@ -82,6 +86,14 @@ impl Coding {
 /// Explicit lattice fields (present when flags bit 0 is set), in 16.16 fixed point pixels.
 ///
 /// Without them the decoder uses the default lattice of spec/sites.md.
+///
+/// ```
+/// use qcs::container::{Header, LatticeFields, Layout, Coding};
+/// let mut h = Header::new(64, 48, Layout::Rgb, 500, 8, Coding::Raw { bits: 8 });
+/// h.lattice = Some(LatticeFields { root_length: 0x1_8000, origin_x: -32 << 16, origin_y: -16 << 16 });
+/// assert_eq!(Header::parse(&h.encode()?)?.0, h); // 1.5 px root, origin (−32, −16)
+/// # Ok::<(), qcs::Error>(())
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct LatticeFields {
     /// Root length, 16.16 fixed point pixels, ≥ 1 (i.e. ≥ 2^-16 px). `0x1_0000` is 1 px.
@@ -266,6 +278,13 @@ impl Header {
     }
 
     /// Checks the rules of the spec that the types do not already enforce.
+    ///
+    /// ```
+    /// use qcs::container::{Header, Layout, Coding};
+    /// assert!(Header::new(0, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 8 }).validate().is_err());
+    /// assert!(Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 9 }).validate().is_err());
+    /// assert!(Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 1 }).validate().is_ok());
+    /// ```
     pub fn validate(&self) -> Result<(), FormatError> {
         // Offsets are unknown here (0); the parser reports real offsets.
         self.validate_at(&[0; 7])

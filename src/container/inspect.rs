@@ -77,10 +77,10 @@ pub struct Inspection {
 ///
 /// ```
 /// use qcs::container::{inspect, ContainerWriter, Header, Layout, Coding, ChunkStatus};
-/// let header = Header::new(3, 3, Layout::Grey, 3, 1, Coding::Raw { bits: 8 });
+/// let header = Header::new(3, 3, Layout::Grey, 4, 2, Coding::Raw { bits: 8 });
 /// let mut w = ContainerWriter::new(Vec::new(), &header)?;
-/// w.write_level(&[1])?;
-/// w.write_level(&[2, 3])?;
+/// w.write_level(&[1, 2])?;
+/// w.write_level(&[3, 4])?;
 /// let mut file = w.finish()?;
 /// file.truncate(file.len() - 5); // cut inside level 1
 /// let info = inspect(&file);
@@ -88,7 +88,7 @@ pub struct Inspection {
 /// assert_eq!(info.levels[0].status, Some(ChunkStatus::Verified));
 /// assert_eq!(info.levels[1].status, Some(ChunkStatus::Truncated));
 /// assert_eq!(info.levels[1].payload_present, 1);
-/// assert_eq!(info.samples_available, 2);
+/// assert_eq!(info.samples_available, 3);
 /// # Ok::<(), qcs::Error>(())
 /// ```
 pub fn inspect(bytes: &[u8]) -> Inspection {
@@ -198,5 +198,105 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
         },
         end: parser.end_state(),
         error,
+    }
+}
+
+impl std::fmt::Display for ChunkStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ChunkStatus::Verified => f.write_str("CRC ok"),
+            ChunkStatus::Truncated => f.write_str("truncated (unverified)"),
+            ChunkStatus::Bad(e) => write!(f, "BAD: {e}"),
+        }
+    }
+}
+
+/// The listing `qcs info` prints: header fields, then one line per level and per chunk.
+///
+/// ```
+/// use qcs::container::{inspect, ContainerWriter, Header, Layout, Coding};
+/// let header = Header::new(3, 3, Layout::Grey, 2, 1, Coding::Raw { bits: 8 });
+/// let mut w = ContainerWriter::new(Vec::new(), &header)?;
+/// w.write_level(&[1])?;
+/// w.write_level(&[2])?;
+/// let text = inspect(&w.finish()?).to_string();
+/// assert!(text.contains("level 1: samples 1..2"));
+/// # Ok::<(), qcs::Error>(())
+/// ```
+impl std::fmt::Display for Inspection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "file: {} bytes", self.file_len)?;
+        match &self.header {
+            None => writeln!(f, "header: incomplete or invalid")?,
+            Some(h) => {
+                writeln!(
+                    f,
+                    "header: {} bytes, {}×{}, {:?} ({} channels), {} samples, first level {}, {} levels",
+                    self.header_len.unwrap_or(0),
+                    h.width,
+                    h.height,
+                    h.layout,
+                    h.layout.channels(),
+                    h.total_samples,
+                    h.first_level,
+                    h.level_count()
+                )?;
+                match &h.coding {
+                    super::Coding::Raw { bits } => {
+                        writeln!(f, "coding: raw, {bits} bits per channel")?
+                    }
+                    super::Coding::Predictive { params } => {
+                        writeln!(f, "coding: predictive, {} parameter bytes", params.len())?
+                    }
+                }
+                match &h.lattice {
+                    None => writeln!(f, "lattice: default")?,
+                    Some(l) => writeln!(
+                        f,
+                        "lattice: root {} px, origin ({}, {}) px",
+                        l.root_length as f64 / 65536.0,
+                        l.origin_x as f64 / 65536.0,
+                        l.origin_y as f64 / 65536.0
+                    )?,
+                }
+            }
+        }
+        for l in &self.levels {
+            write!(
+                f,
+                "level {}: samples {}..{}",
+                l.level, l.samples.start, l.samples.end
+            )?;
+            match (&l.chunk, &l.status) {
+                (Some(c), Some(s)) => writeln!(
+                    f,
+                    ", chunk #{} at byte {}, {} payload bytes, {s}",
+                    c.index, c.offset, l.payload_present
+                )?,
+                _ => writeln!(f, ", missing")?,
+            }
+        }
+        for c in &self.chunks {
+            write!(f, "{}", c.chunk)?;
+            if let Some(len) = c.payload_len {
+                write!(f, ", {len} payload bytes")?;
+            }
+            writeln!(f, ", {}", c.status)?;
+        }
+        for m in &self.metadata {
+            match m {
+                Metadata::Icc(p) => writeln!(f, "ICC profile: {} bytes", p.len())?,
+                Metadata::Text { key, value } => writeln!(f, "text: {key} = {value}")?,
+            }
+        }
+        writeln!(
+            f,
+            "samples: {} verified, {} available; end: {:?}",
+            self.samples_verified, self.samples_available, self.end
+        )?;
+        if let Some(e) = &self.error {
+            writeln!(f, "error: {e}")?;
+        }
+        Ok(())
     }
 }

@@ -71,6 +71,13 @@ impl std::fmt::Display for ChunkRef {
 }
 
 /// A violation of the byte format, saying what and where (byte offsets are from the file start).
+///
+/// ```
+/// use qcs::container::{FormatError, Parser};
+/// let mut p = Parser::new(Default::default());
+/// let err = p.push(b"qcs\x07", &mut Vec::new()).unwrap_err();
+/// assert!(matches!(err, qcs::Error::Format(FormatError::UnsupportedVersion { version: 7 })));
+/// ```
 #[derive(Debug, Clone, PartialEq, Eq, ThisError)]
 #[non_exhaustive]
 pub enum FormatError {
@@ -196,6 +203,12 @@ pub enum FormatError {
         /// The chunk.
         chunk: ChunkRef,
     },
+    /// The file uses a coding this decoder does not implement (e.g. the reserved predictive coding).
+    #[error("coding {coding} is not supported by this decoder")]
+    UnsupportedCoding {
+        /// The coding byte.
+        coding: u8,
+    },
     /// A text chunk that is not `key 0x00 value` in UTF-8 with a non-empty key.
     #[error("{chunk}: malformed text chunk: {reason}")]
     BadText {
@@ -208,6 +221,14 @@ pub enum FormatError {
 
 impl FormatError {
     /// The chunk the error is in, if it is in a chunk (not in the header).
+    ///
+    /// ```
+    /// use qcs::container::{ChunkRef, FormatError};
+    /// let chunk = ChunkRef { index: 2, tag: b'L', offset: 40 };
+    /// let e = FormatError::UnknownCritical { chunk };
+    /// assert_eq!(e.chunk(), Some(chunk));
+    /// assert_eq!(e.to_string(), "chunk #2 'L' at byte 40: unknown critical chunk");
+    /// ```
     pub fn chunk(&self) -> Option<ChunkRef> {
         match self {
             FormatError::ChunkLength { chunk, .. }

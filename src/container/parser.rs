@@ -8,6 +8,14 @@ use crate::Limits;
 use std::ops::Range;
 
 /// How a [`Parser`] treats limits and damage.
+///
+/// ```
+/// use qcs::container::ParserOptions;
+/// let mut limits = qcs::Limits::default();
+/// limits.max_samples = 1 << 16;
+/// let opts = ParserOptions::with_limits(limits).recover(true);
+/// assert!(opts.recover);
+/// ```
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct ParserOptions {
@@ -112,7 +120,7 @@ pub enum Event {
 /// How far the parser has got.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Progress {
-    /// Bytes consumed from the start of the file.
+    /// Bytes consumed from the start of the file (unspecified after a fatal error).
     pub bytes_consumed: u64,
     /// Whether the header has been parsed and verified.
     pub header_complete: bool,
@@ -190,10 +198,11 @@ enum State {
 ///
 /// ```
 /// use qcs::container::{ContainerWriter, Header, Layout, Coding, Parser, Event, EndState};
-/// let header = Header::new(2, 2, Layout::Rgb, 3, 1, Coding::Raw { bits: 8 });
+/// // Levels [0, 2) and [2, 4) of RGB samples, 8 bits per value.
+/// let header = Header::new(2, 2, Layout::Rgb, 4, 2, Coding::Raw { bits: 8 });
 /// let mut w = ContainerWriter::new(Vec::new(), &header)?;
-/// w.write_level(&[1, 2, 3])?;
-/// w.write_level(&[4, 5, 6, 7, 8, 9])?;
+/// w.write_level(&[1, 2, 3, 4, 5, 6])?;
+/// w.write_level(&[7, 8, 9, 10, 11, 12])?;
 /// let file = w.finish()?;
 ///
 /// // A prefix that ends inside level 1, after its first sample.
@@ -201,8 +210,8 @@ enum State {
 /// let mut p = Parser::new(Default::default());
 /// let mut events = Vec::new();
 /// p.push(&file[..cut], &mut events)?;
-/// assert_eq!(p.progress().samples_verified, 1);
-/// assert_eq!(p.progress().samples_available, 2);
+/// assert_eq!(p.progress().samples_verified, 2);
+/// assert_eq!(p.progress().samples_available, 3);
 /// assert!(matches!(p.end_state(), EndState::InChunk(_)));
 /// p.push(&file[cut..], &mut events)?;
 /// assert_eq!(p.end_state(), EndState::Complete);
