@@ -11,7 +11,9 @@ fn sites(c: &mut Criterion) {
         // About one site per pixel at 10^6: a 1024×1024 image.
         let q = Quasicrystal::new(1024, 1024).expect("valid size");
         g.throughput(Throughput::Elements(n as u64));
-        g.bench_with_input(BenchmarkId::new("quasicrystal_1024", n), &n, |b, &n| b.iter(|| q.first(n)));
+        g.bench_with_input(BenchmarkId::new("quasicrystal_1024", n), &n, |b, &n| {
+            b.iter(|| q.first(n))
+        });
     }
     g.finish();
 }

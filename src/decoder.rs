@@ -1,7 +1,9 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
 use crate::coding::raw::RawUnpacker;
-use crate::container::{Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions};
+use crate::container::{
+    Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
+};
 use crate::reconstruction::{Method, SampleSet};
 use crate::sites::{Frame, Point, Quasicrystal};
 use crate::{Error, Limits, Result};
@@ -128,7 +130,10 @@ impl StreamDecoder {
         match e {
             Event::Header(h) => {
                 let frame = match h.lattice {
-                    Some(l) => Frame { root_len: l.root_length, origin: [l.origin_x, l.origin_y] },
+                    Some(l) => Frame {
+                        root_len: l.root_length,
+                        origin: [l.origin_x, l.origin_y],
+                    },
                     None => Frame::default_for(h.width, h.height),
                 };
                 let seq = Quasicrystal::with_frame(h.width, h.height, frame)
@@ -145,11 +150,15 @@ impl StreamDecoder {
             Event::LevelStart { samples, .. } => {
                 let h = self.header.as_ref().expect("header precedes levels");
                 self.unpacker = match h.coding {
-                    Coding::Raw { bits } => {
-                        Some(RawUnpacker::new(h.layout.channels(), bits, samples.end - samples.start)?)
-                    }
+                    Coding::Raw { bits } => Some(RawUnpacker::new(
+                        h.layout.channels(),
+                        bits,
+                        samples.end - samples.start,
+                    )?),
                     Coding::Predictive { .. } => {
-                        return Err(Error::Parameter("the predictive coding is not supported yet".into()))
+                        return Err(Error::Parameter(
+                            "the predictive coding is not supported yet".into(),
+                        ))
                     }
                 };
             }
@@ -176,7 +185,9 @@ impl StreamDecoder {
     }
 
     fn channels(&self) -> usize {
-        self.header.as_ref().map_or(1, |h| h.layout.channels() as usize)
+        self.header
+            .as_ref()
+            .map_or(1, |h| h.layout.channels() as usize)
     }
 
     fn sample_count(&self) -> u64 {
@@ -205,7 +216,9 @@ impl StreamDecoder {
 
     /// Whether every sample of the file has arrived and is verified.
     pub fn is_complete(&self) -> bool {
-        self.header.as_ref().is_some_and(|h| self.verified == h.total_samples)
+        self.header
+            .as_ref()
+            .is_some_and(|h| self.verified == h.total_samples)
     }
 
     /// In recovery mode, the error that stopped decoding (everything verified before it is kept).
@@ -239,11 +252,16 @@ impl StreamDecoder {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.limits.check_output(width as u64, height as u64)?;
         if width == 0 || height == 0 {
-            return Err(Error::Parameter(format!("output size {width}×{height} is empty")));
+            return Err(Error::Parameter(format!(
+                "output size {width}×{height} is empty"
+            )));
         }
         let n = self.sample_count();
         let c = self.channels();
-        let mut set = self.set.take().unwrap_or_else(|| SampleSet::new(h.width, h.height, c));
+        let mut set = self
+            .set
+            .take()
+            .unwrap_or_else(|| SampleSet::new(h.width, h.height, c));
         let have = set.len();
         let (pos, col) = self.samples(n);
         for k in have..n as usize {
@@ -258,20 +276,33 @@ impl StreamDecoder {
             levels_complete: self.levels_complete,
             is_final: self.is_complete(),
         };
-        Ok(if decoded.is_final { Picture::Final(decoded) } else { Picture::Preview(decoded) })
+        Ok(if decoded.is_final {
+            Picture::Final(decoded)
+        } else {
+            Picture::Preview(decoded)
+        })
     }
 
     /// Renders from the first `k` available samples only (a fresh set, not the kept one).
-    fn render_prefix(&mut self, k: u64, method: Method, width: u32, height: u32) -> Result<DecodedImage> {
+    fn render_prefix(
+        &mut self,
+        k: u64,
+        method: Method,
+        width: u32,
+        height: u32,
+    ) -> Result<DecodedImage> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.limits.check_output(width as u64, height as u64)?;
         if width == 0 || height == 0 {
-            return Err(Error::Parameter(format!("output size {width}×{height} is empty")));
+            return Err(Error::Parameter(format!(
+                "output size {width}×{height} is empty"
+            )));
         }
         let c = self.channels();
         let (pos, col) = self.samples(k);
         let used = pos.len() as u64;
-        let pixels = crate::reconstruction::render((h.width, h.height), c, pos, col, method, width, height);
+        let pixels =
+            crate::reconstruction::render((h.width, h.height), c, pos, col, method, width, height);
         Ok(DecodedImage {
             image: to_image(h.layout, width, height, pixels),
             samples_used: used,
@@ -286,7 +317,9 @@ fn to_image(layout: Layout, w: u32, h: u32, px: Vec<u8>) -> DynamicImage {
     let bad = "render returns w×h×channels bytes";
     match layout {
         Layout::Grey => DynamicImage::ImageLuma8(image::GrayImage::from_raw(w, h, px).expect(bad)),
-        Layout::GreyAlpha => DynamicImage::ImageLumaA8(image::GrayAlphaImage::from_raw(w, h, px).expect(bad)),
+        Layout::GreyAlpha => {
+            DynamicImage::ImageLumaA8(image::GrayAlphaImage::from_raw(w, h, px).expect(bad))
+        }
         Layout::Rgb => DynamicImage::ImageRgb8(image::RgbImage::from_raw(w, h, px).expect(bad)),
         Layout::Rgba => DynamicImage::ImageRgba8(image::RgbaImage::from_raw(w, h, px).expect(bad)),
     }
@@ -342,10 +375,15 @@ impl Default for DecodeOptions {
 /// ```
 pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     let bytes = &bytes[..opts.max_bytes.unwrap_or(usize::MAX).min(bytes.len())];
-    let mut dec = StreamDecoder::with_options(ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover));
+    let mut dec = StreamDecoder::with_options(
+        ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover),
+    );
     dec.push(bytes)?;
     let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
     let (w, ht) = opts.size.unwrap_or((h.width, h.height));
-    let k = opts.max_samples.unwrap_or(u64::MAX).min(dec.samples_available());
+    let k = opts
+        .max_samples
+        .unwrap_or(u64::MAX)
+        .min(dec.samples_available());
     dec.render_prefix(k, opts.method, w, ht)
 }

@@ -96,15 +96,27 @@ pub fn encode(image: &DynamicImage, opts: &EncodeOptions) -> Result<Vec<u8>> {
 /// Encodes an image to any writer.
 pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W) -> Result<()> {
     let (width, height) = (image.width(), image.height());
-    let frame = opts.frame.unwrap_or_else(|| Frame::default_for(width, height));
-    let seq = Quasicrystal::with_frame(width, height, frame).map_err(|e| Error::Parameter(e.to_string()))?;
+    let frame = opts
+        .frame
+        .unwrap_or_else(|| Frame::default_for(width, height));
+    let seq = Quasicrystal::with_frame(width, height, frame)
+        .map_err(|e| Error::Parameter(e.to_string()))?;
     if opts.first_level == 0 {
-        return Err(Error::Parameter("the first level must hold at least one sample".into()));
+        return Err(Error::Parameter(
+            "the first level must hold at least one sample".into(),
+        ));
     }
     let n = opts.sample_count(width, height);
     let (layout, pixels) = layout_and_pixels(image);
     let channels = layout.channels() as usize;
-    let mut header = Header::new(width, height, layout, n, opts.first_level, opts.coding.clone());
+    let mut header = Header::new(
+        width,
+        height,
+        layout,
+        n,
+        opts.first_level,
+        opts.coding.clone(),
+    );
     if opts.frame.is_some() {
         header.lattice = Some(LatticeFields {
             root_length: frame.root_len,
@@ -122,7 +134,9 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         let payload = match &opts.coding {
             Coding::Raw { bits } => crate::coding::raw::pack(values, *bits)?,
             Coding::Predictive { .. } => {
-                return Err(Error::Parameter("the predictive coding is not available yet".into()))
+                return Err(Error::Parameter(
+                    "the predictive coding is not available yet".into(),
+                ))
             }
         };
         w.write_level(&payload)?;

@@ -29,5 +29,5 @@ pub mod styles;
 pub use decoder::{decode, DecodeOptions, DecodedImage, Picture, StreamDecoder};
 pub use encoder::{encode, encode_to, EncodeOptions};
 pub use error::{Error, Result};
-pub use reconstruction::Method;
 pub use limits::Limits;
+pub use reconstruction::Method;

@@ -53,11 +53,18 @@ impl<'a> SourceImage<'a> {
             for x in 0..w {
                 for k in 0..c {
                     row[k] += pixels[(y * w + x) * c + k] as u64;
-                    sat[(y + 1) * stride + (x + 1) * c + k] = sat[y * stride + (x + 1) * c + k] + row[k];
+                    sat[(y + 1) * stride + (x + 1) * c + k] =
+                        sat[y * stride + (x + 1) * c + k] + row[k];
                 }
             }
         }
-        SourceImage { pixels, width: w, height: h, channels: c, sat }
+        SourceImage {
+            pixels,
+            width: w,
+            height: h,
+            channels: c,
+            sat,
+        }
     }
 
     fn box_mean(&self, x0: usize, y0: usize, x1: usize, y1: usize, out: &mut Vec<u8>) {
@@ -96,7 +103,8 @@ impl<'a> SourceImage<'a> {
                     let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
                     for c in 0..self.channels {
                         let v = (1.0 - ty)
-                            * ((1.0 - tx) * self.pixel(x0, y0, c) as f64 + tx * self.pixel(x1, y0, c) as f64)
+                            * ((1.0 - tx) * self.pixel(x0, y0, c) as f64
+                                + tx * self.pixel(x1, y0, c) as f64)
                             + ty * ((1.0 - tx) * self.pixel(x0, y1, c) as f64
                                 + tx * self.pixel(x1, y1, c) as f64);
                         out.push(v.round().clamp(0.0, 255.0) as u8);

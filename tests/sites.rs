@@ -20,7 +20,11 @@ fn fig1(closed: bool) -> usize {
         let ok_dec = forms.iter().all(|f| {
             let a = (*f - two_r).signum();
             let b = (-*f - two_r).signum();
-            if closed { a <= 0 && b <= 0 } else { a < 0 && b < 0 }
+            if closed {
+                a <= 0 && b <= 0
+            } else {
+                a < 0 && b < 0
+            }
         });
         let ok_sq = if closed {
             in_closed_square(x)
@@ -68,7 +72,12 @@ fn brute_sorted(q: &Quasicrystal, w: u32, h: u32, r: f64) -> Vec<ZZeta> {
     let o = [f.origin[0] as f64 / 65536.0, f.origin[1] as f64 / 65536.0];
     let mut v = Vec::new();
     disk_candidates(
-        [-o[0] / l - 1.0, (w as f64 - o[0]) / l + 1.0, -o[1] / l - 1.0, (h as f64 - o[1]) / l + 1.0],
+        [
+            -o[0] / l - 1.0,
+            (w as f64 - o[0]) / l + 1.0,
+            -o[1] / l - 1.0,
+            (h as f64 - o[1]) / l + 1.0,
+        ],
         r,
         &mut |x| {
             if f.contains(x, w, h) {
@@ -85,7 +94,14 @@ fn first_n_equals_brute_force_sort() {
     for (w, h, frame) in [
         (64, 64, None),
         (97, 41, None),
-        (50, 80, Some(Frame { root_len: 3 << 15, origin: [25 << 16, 40 << 16] })),
+        (
+            50,
+            80,
+            Some(Frame {
+                root_len: 3 << 15,
+                origin: [25 << 16, 40 << 16],
+            }),
+        ),
     ] {
         let q = match frame {
             Some(f) => Quasicrystal::with_frame(w, h, f).unwrap(),
@@ -98,7 +114,9 @@ fn first_n_equals_brute_force_sort() {
         assert_eq!(got, all[..n].to_vec());
         // Positions lie in the image, in raster order within ties.
         for s in q.first(n) {
-            assert!(s.pos[0] >= 0.0 && s.pos[0] < w as f64 && s.pos[1] >= 0.0 && s.pos[1] < h as f64);
+            assert!(
+                s.pos[0] >= 0.0 && s.pos[0] < w as f64 && s.pos[1] >= 0.0 && s.pos[1] < h as f64
+            );
         }
     }
 }
@@ -126,7 +144,10 @@ fn nn_and_cover(pts: &[[f64; 2]], w: f64, h: f64) -> (f64, f64) {
     while y < h {
         let mut x = 0.5;
         while x < w {
-            let d = pts.iter().map(|p| (p[0] - x).powi(2) + (p[1] - y).powi(2)).fold(f64::INFINITY, f64::min);
+            let d = pts
+                .iter()
+                .map(|p| (p[0] - x).powi(2) + (p[1] - y).powi(2))
+                .fold(f64::INFINITY, f64::min);
             cover = cover.max(d.sqrt());
             x += step;
         }
@@ -166,7 +187,12 @@ fn count_follows_the_density_formula() {
         let l = f.root_len as f64 / 65536.0;
         let o = [f.origin[0] as f64 / 65536.0, f.origin[1] as f64 / 65536.0];
         disk_candidates(
-            [-o[0] / l, (w as f64 - o[0]) / l, -o[1] / l, (h as f64 - o[1]) / l],
+            [
+                -o[0] / l,
+                (w as f64 - o[0]) / l,
+                -o[1] / l,
+                (h as f64 - o[1]) / l,
+            ],
             r,
             &mut |x| {
                 let (sr, si) = x.star().to_f64();
@@ -177,7 +203,10 @@ fn count_follows_the_density_formula() {
         );
         let expected = DENSITY * (w * h) as f64 * std::f64::consts::PI * r2;
         let rel = n as f64 / expected - 1.0;
-        assert!(rel.abs() < 0.02, "target {target}: {n} vs {expected:.1} ({rel:+.4})");
+        assert!(
+            rel.abs() < 0.02,
+            "target {target}: {n} vs {expected:.1} ({rel:+.4})"
+        );
     }
 }
 
@@ -195,11 +224,15 @@ fn committed_site_vectors() {
                 s.pos[0], s.pos[1], r2.a, r2.b
             );
         }
-        let path = format!("{}/spec/vectors/sites-{w}x{h}.csv", env!("CARGO_MANIFEST_DIR"));
+        let path = format!(
+            "{}/spec/vectors/sites-{w}x{h}.csv",
+            env!("CARGO_MANIFEST_DIR")
+        );
         if std::env::var_os("QCS_REGENERATE").is_some() {
             std::fs::write(&path, &text).unwrap();
         }
-        let want = std::fs::read_to_string(&path).expect("vector file (QCS_REGENERATE=1 writes it)");
+        let want =
+            std::fs::read_to_string(&path).expect("vector file (QCS_REGENERATE=1 writes it)");
         assert_eq!(text, want, "{path}");
     }
 }

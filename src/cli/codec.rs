@@ -62,7 +62,11 @@ pub struct EncodeArgs {
 
 impl EncodeArgs {
     fn options(&self) -> EncodeOptions {
-        let mut o = EncodeOptions { samples: self.samples, coding: Coding::Raw { bits: self.bits }, ..Default::default() };
+        let mut o = EncodeOptions {
+            samples: self.samples,
+            coding: Coding::Raw { bits: self.bits },
+            ..Default::default()
+        };
         if let Some(d) = self.density {
             o.density = d;
         }
@@ -80,14 +84,23 @@ impl EncodeArgs {
 }
 
 fn encode_file(input: &Path, output: &Path, opts: &EncodeOptions) -> Result<(u64, u64)> {
-    let img = image::open(input).with_context(|| format!("cannot read image {}", input.display()))?;
-    let bytes = qcs::encode(&img, opts).with_context(|| format!("cannot encode {}", input.display()))?;
+    let img =
+        image::open(input).with_context(|| format!("cannot read image {}", input.display()))?;
+    let bytes =
+        qcs::encode(&img, opts).with_context(|| format!("cannot encode {}", input.display()))?;
     std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
-    Ok((std::fs::metadata(input).map(|m| m.len()).unwrap_or(0), bytes.len() as u64))
+    Ok((
+        std::fs::metadata(input).map(|m| m.len()).unwrap_or(0),
+        bytes.len() as u64,
+    ))
 }
 
 fn is_image(p: &Path) -> bool {
-    let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = p
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     image::ImageFormat::from_extension(&ext).is_some()
 }
 
@@ -95,11 +108,19 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
     let opts = a.options();
     let Some(dir) = &a.out_dir else {
         if a.paths.len() != 2 {
-            bail!("give one input and one output (IN OUT.qcs), or use --out-dir DIR for many inputs");
+            bail!(
+                "give one input and one output (IN OUT.qcs), or use --out-dir DIR for many inputs"
+            );
         }
         let (i, o) = encode_file(&a.paths[0], &a.paths[1], &opts)?;
         if !quiet {
-            eprintln!("{} → {}: {} → {} bytes", a.paths[0].display(), a.paths[1].display(), i, o);
+            eprintln!(
+                "{} → {}: {} → {} bytes",
+                a.paths[0].display(),
+                a.paths[1].display(),
+                i,
+                o
+            );
         }
         return Ok(());
     };
@@ -119,8 +140,14 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
         }
     }
     let start = Instant::now();
-    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(inputs.len() as u64) };
-    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}").expect("valid template"));
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(inputs.len() as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}").expect("valid template"),
+    );
     let results: Vec<Result<(u64, u64)>> = inputs
         .par_iter()
         .map(|p| {
@@ -155,7 +182,11 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
         );
     }
     match first_err {
-        Some(e) => Err(e.context(format!("{} of {} files failed", inputs.len() - ok, inputs.len()))),
+        Some(e) => Err(e.context(format!(
+            "{} of {} files failed",
+            inputs.len() - ok,
+            inputs.len()
+        ))),
         None => Ok(()),
     }
 }
@@ -200,7 +231,10 @@ fn output_size(size: Option<(u32, u32)>, scale: Option<f64>, w: u32, h: u32) -> 
     if !(f > 0.0 && f.is_finite()) {
         bail!("--scale must be positive");
     }
-    Ok((((w as f64 * f).round() as u32).max(1), ((h as f64 * f).round() as u32).max(1)))
+    Ok((
+        ((w as f64 * f).round() as u32).max(1),
+        ((h as f64 * f).round() as u32).max(1),
+    ))
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -216,11 +250,17 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             return Ok(());
         }
     }
-    let Some(out) = &a.output else { bail!("give an output image path (or --frames DIR)") };
+    let Some(out) = &a.output else {
+        bail!("give an output image path (or --frames DIR)")
+    };
     let header = {
         let mut d = StreamDecoder::new(qcs::Limits::default());
-        d.push(&bytes[..bytes.len().min(qcs::container::MAX_HEADER_LEN)]).with_context(ctx)?;
-        d.header().cloned().ok_or(qcs::Error::NeedMoreData).with_context(ctx)?
+        d.push(&bytes[..bytes.len().min(qcs::container::MAX_HEADER_LEN)])
+            .with_context(ctx)?;
+        d.header()
+            .cloned()
+            .ok_or(qcs::Error::NeedMoreData)
+            .with_context(ctx)?
     };
     let size = output_size(a.size, a.scale, header.width, header.height)?;
     let opts = DecodeOptions {
@@ -232,7 +272,9 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
         ..Default::default()
     };
     let d = qcs::decode(&bytes, &opts).with_context(ctx)?;
-    d.image.save(out).with_context(|| format!("cannot write {}", out.display()))?;
+    d.image
+        .save(out)
+        .with_context(|| format!("cannot write {}", out.display()))?;
     if !quiet {
         eprintln!(
             "{}: {}×{} from {} samples ({} verified, {} levels){}",
@@ -250,9 +292,14 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
 
 fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut dec = StreamDecoder::with_options(qcs::container::ParserOptions::with_limits(qcs::Limits::default()).recover(a.recover));
+    let mut dec = StreamDecoder::with_options(
+        qcs::container::ParserOptions::with_limits(qcs::Limits::default()).recover(a.recover),
+    );
     let mut cuts: Vec<usize> = match a.every {
-        Some(k) if k > 0 => (1..).map(|i| i * k).take_while(|&c| c < bytes.len()).collect(),
+        Some(k) if k > 0 => (1..)
+            .map(|i| i * k)
+            .take_while(|&c| c < bytes.len())
+            .collect(),
         Some(_) => bail!("--every must be positive"),
         None => level_ends(bytes),
     };
@@ -263,12 +310,17 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
     for cut in cuts {
         dec.push(&bytes[fed..cut])?;
         fed = cut;
-        let Some(h) = dec.header().cloned() else { continue };
+        let Some(h) = dec.header().cloned() else {
+            continue;
+        };
         let size = output_size(a.size, a.scale, h.width, h.height)?;
         let pic = dec.render(a.method.into(), size.0, size.1)?;
         let kind = if pic.is_final() { "final" } else { "preview" };
         let path = dir.join(format!("frame-{n:03}-{cut:08}B-{kind}.png"));
-        pic.decoded().image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        pic.decoded()
+            .image
+            .save(&path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
         if !quiet {
             eprintln!("{}: {} samples", path.display(), pic.decoded().samples_used);
         }
@@ -280,7 +332,12 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
 /// Byte offsets at which each level chunk ends (where the next chunk starts).
 fn level_ends(bytes: &[u8]) -> Vec<usize> {
     let ins = qcs::container::inspect(bytes);
-    let starts: Vec<u64> = ins.chunks.iter().map(|c| c.chunk.offset).chain([ins.file_len]).collect();
+    let starts: Vec<u64> = ins
+        .chunks
+        .iter()
+        .map(|c| c.chunk.offset)
+        .chain([ins.file_len])
+        .collect();
     ins.chunks
         .iter()
         .enumerate()
@@ -300,7 +357,10 @@ pub fn info(a: InfoArgs) -> Result<()> {
     let ins = qcs::container::inspect(&bytes);
     println!("file: {} ({} bytes)", a.input.display(), ins.file_len);
     if let Some(h) = &ins.header {
-        println!("version 1, {}×{} {:?}, {} samples, first level {}", h.width, h.height, h.layout, h.total_samples, h.first_level);
+        println!(
+            "version 1, {}×{} {:?}, {} samples, first level {}",
+            h.width, h.height, h.layout, h.total_samples, h.first_level
+        );
         println!("coding: {:?}", h.coding);
         match h.lattice {
             Some(l) => println!(
@@ -313,10 +373,15 @@ pub fn info(a: InfoArgs) -> Result<()> {
         }
         println!("header: {} bytes, CRC ok", ins.header_len.unwrap_or(0));
     }
-    println!("{:>5} {:>5} {:>10} {:>19} {:>9} {:>9}  status", "chunk", "tag", "offset", "samples", "payload", "present");
+    println!(
+        "{:>5} {:>5} {:>10} {:>19} {:>9} {:>9}  status",
+        "chunk", "tag", "offset", "samples", "payload", "present"
+    );
     for c in &ins.chunks {
         let lvl = c.level.and_then(|k| ins.levels.get(k as usize));
-        let samples = lvl.map_or(String::from("-"), |l| format!("{}..{}", l.samples.start, l.samples.end));
+        let samples = lvl.map_or(String::from("-"), |l| {
+            format!("{}..{}", l.samples.start, l.samples.end)
+        });
         let present = lvl.map_or(String::from("-"), |l| l.payload_present.to_string());
         let status = match &c.status {
             qcs::container::ChunkStatus::Verified => "CRC ok".to_string(),
@@ -344,7 +409,10 @@ pub fn info(a: InfoArgs) -> Result<()> {
             qcs::container::Metadata::Text { key, value } => println!("text: {key} = {value}"),
         }
     }
-    println!("samples: {} available, {} verified; end: {:?}", ins.samples_available, ins.samples_verified, ins.end);
+    println!(
+        "samples: {} available, {} verified; end: {:?}",
+        ins.samples_available, ins.samples_verified, ins.end
+    );
     if let Some(e) = ins.error {
         return Err(e).with_context(|| format!("{} is damaged", a.input.display()));
     }
@@ -363,26 +431,52 @@ pub struct DemoArgs {
 }
 
 pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
-    std::fs::create_dir_all(&a.out_dir).with_context(|| format!("cannot create {}", a.out_dir.display()))?;
-    let img = image::open(&a.input).with_context(|| format!("cannot read image {}", a.input.display()))?;
-    let opts = EncodeOptions { samples: a.samples, ..Default::default() };
+    std::fs::create_dir_all(&a.out_dir)
+        .with_context(|| format!("cannot create {}", a.out_dir.display()))?;
+    let img = image::open(&a.input)
+        .with_context(|| format!("cannot read image {}", a.input.display()))?;
+    let opts = EncodeOptions {
+        samples: a.samples,
+        ..Default::default()
+    };
     let bytes = qcs::encode(&img, &opts)?;
-    let stem = a.input.file_stem().and_then(|s| s.to_str()).unwrap_or("image").to_string();
+    let stem = a
+        .input
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("image")
+        .to_string();
     let qcs_path = a.out_dir.join(format!("{stem}.qcs"));
-    std::fs::write(&qcs_path, &bytes).with_context(|| format!("cannot write {}", qcs_path.display()))?;
+    std::fs::write(&qcs_path, &bytes)
+        .with_context(|| format!("cannot write {}", qcs_path.display()))?;
     let reference = img.to_rgb8();
     let (w, h) = reference.dimensions();
     let mut strip = image::RgbImage::new(w * 4, h);
     if !quiet {
-        println!("{}: {} bytes ({} samples)", qcs_path.display(), bytes.len(), opts.sample_count(w, h));
-        println!("{:>7} {:>8} {:>8} {:>8}  file", "share", "bytes", "samples", "PSNR dB");
+        println!(
+            "{}: {} bytes ({} samples)",
+            qcs_path.display(),
+            bytes.len(),
+            opts.sample_count(w, h)
+        );
+        println!(
+            "{:>7} {:>8} {:>8} {:>8}  file",
+            "share", "bytes", "samples", "PSNR dB"
+        );
     }
     for (i, pct) in [1usize, 5, 25, 100].into_iter().enumerate() {
         let cut = (bytes.len() * pct).div_ceil(100);
-        let d = qcs::decode(&bytes, &DecodeOptions { max_bytes: Some(cut), ..Default::default() })?;
+        let d = qcs::decode(
+            &bytes,
+            &DecodeOptions {
+                max_bytes: Some(cut),
+                ..Default::default()
+            },
+        )?;
         let rgb = d.image.to_rgb8();
         let path = a.out_dir.join(format!("{stem}-{pct:03}pct.png"));
-        rgb.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        rgb.save(&path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
         image::imageops::replace(&mut strip, &rgb, (i as u32 * w) as i64, 0);
         if !quiet {
             println!(
@@ -396,7 +490,9 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
         }
     }
     let path = a.out_dir.join(format!("{stem}-strip.png"));
-    strip.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+    strip
+        .save(&path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
     if !quiet {
         println!("side by side: {}", path.display());
     }
@@ -404,7 +500,12 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
 }
 
 fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
-    let se: f64 = a.as_raw().iter().zip(b.as_raw()).map(|(&x, &y)| (x as f64 - y as f64).powi(2)).sum();
+    let se: f64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(&x, &y)| (x as f64 - y as f64).powi(2))
+        .sum();
     let mse = se / a.as_raw().len() as f64;
     if mse == 0.0 {
         f64::INFINITY

@@ -20,16 +20,22 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Encode images (any format the image crate reads) to .qcs.
-    #[command(after_help = "Examples:\n  qcs encode photo.png photo.qcs\n  qcs encode photo.jpg photo.qcs --samples 20000 --bits 6\n  qcs encode photos/ *.png --out-dir qcs/   (many files in parallel)")]
+    #[command(
+        after_help = "Examples:\n  qcs encode photo.png photo.qcs\n  qcs encode photo.jpg photo.qcs --samples 20000 --bits 6\n  qcs encode photos/ *.png --out-dir qcs/   (many files in parallel)"
+    )]
     Encode(codec::EncodeArgs),
     /// Decode a .qcs file (or a prefix of one) to an image; the format follows the extension.
-    #[command(after_help = "Examples:\n  qcs decode photo.qcs photo.png\n  qcs decode photo.qcs thumb.png --size 120x80 --method shepard\n  qcs decode photo.qcs cut.png --bytes 2048   (as a cut download would)\n  qcs decode photo.qcs --frames frames/ --every 4096")]
+    #[command(
+        after_help = "Examples:\n  qcs decode photo.qcs photo.png\n  qcs decode photo.qcs thumb.png --size 120x80 --method shepard\n  qcs decode photo.qcs cut.png --bytes 2048   (as a cut download would)\n  qcs decode photo.qcs --frames frames/ --every 4096"
+    )]
     Decode(codec::DecodeArgs),
     /// Show a .qcs file's header, levels (byte offsets, sample ranges) and CRC status.
     #[command(after_help = "Example:\n  qcs info photo.qcs")]
     Info(codec::InfoArgs),
     /// Print the first N sample sites of a sampler as CSV (index,x,y[,n0,n1,n2,n3]).
-    #[command(after_help = "Examples:\n  qcs sites --width 512 --height 512 --count 1089\n  qcs sites --width 640 --height 480 --count 500 --sampler halton")]
+    #[command(
+        after_help = "Examples:\n  qcs sites --width 512 --height 512 --count 1089\n  qcs sites --width 640 --height 480 --count 500 --sampler halton"
+    )]
     Sites(sites::SitesArgs),
     /// Encode an image and write previews decoded from growing prefixes of its file.
     #[command(after_help = "Example:\n  qcs demo assets/rocket.png out/")]
@@ -75,7 +81,9 @@ pub fn main() -> ExitCode {
 
 /// Parses `WxH`.
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, got {s:?}"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got {s:?}"))?;
     let w: u32 = w.parse().map_err(|_| format!("bad width in {s:?}"))?;
     let h: u32 = h.parse().map_err(|_| format!("bad height in {s:?}"))?;
     if w == 0 || h == 0 {
@@ -85,7 +93,10 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// A sampler by its CLI name (the quasicrystal included).
-pub fn sampler_by_name(name: &str, seed: u64) -> Option<Box<dyn qcs::sites::Sampler + Send + Sync>> {
+pub fn sampler_by_name(
+    name: &str,
+    seed: u64,
+) -> Option<Box<dyn qcs::sites::Sampler + Send + Sync>> {
     if name == "quasicrystal" {
         return Some(Box::new(qcs::sites::Quasicrystal::new(1, 1).ok()?));
     }

@@ -32,12 +32,19 @@ pub fn run(a: SitesArgs) -> Result<()> {
         writeln!(out, "index,x,y,n0,n1,n2,n3")?;
         for (i, s) in q.first(a.count).iter().enumerate() {
             let [n0, n1, n2, n3] = s.lattice.0;
-            writeln!(out, "{i},{:.6},{:.6},{n0},{n1},{n2},{n3}", s.pos[0], s.pos[1])?;
+            writeln!(
+                out,
+                "{i},{:.6},{:.6},{n0},{n1},{n2},{n3}",
+                s.pos[0], s.pos[1]
+            )?;
         }
         return Ok(());
     }
     let Some(sampler) = super::sampler_by_name(&a.sampler, a.seed) else {
-        bail!("unknown sampler {:?} (quasicrystal, periodic, jittered, halton, random, farthest)", a.sampler);
+        bail!(
+            "unknown sampler {:?} (quasicrystal, periodic, jittered, halton, random, farthest)",
+            a.sampler
+        );
     };
     writeln!(out, "index,x,y")?;
     for (i, p) in sampler.sites(a.width, a.height, a.count).iter().enumerate() {

@@ -36,11 +36,17 @@ pub fn one_d(l1: f64, u1: f64, l2: f64, u2: f64, f: &mut impl FnMut(ZTau)) {
         return;
     }
     let (len1, len2) = ((u1 - l1).max(1e-300), (u2 - l2).max(1e-300));
-    let j = ((len2 / len1).ln() / (2.0 * TAU.ln())).round().clamp(-60.0, 60.0) as i32;
+    let j = ((len2 / len1).ln() / (2.0 * TAU.ln()))
+        .round()
+        .clamp(-60.0, 60.0) as i32;
     let s1 = TAU.powi(j);
     let s2 = (-1.0 / TAU).powi(j);
     let (a1, b1) = (l1 * s1, u1 * s1);
-    let (a2, b2) = if s2 > 0.0 { (l2 * s2, u2 * s2) } else { (u2 * s2, l2 * s2) };
+    let (a2, b2) = if s2 > 0.0 {
+        (l2 * s2, u2 * s2)
+    } else {
+        (u2 * s2, l2 * s2)
+    };
     let (a1, b1) = widen(a1, b1);
     let (a2, b2) = widen(a2, b2);
     let back = ZTau::tau_pow(-j);
@@ -83,9 +89,13 @@ pub fn disk_candidates(bounds: [f64; 4], r: f64, f: &mut impl FnMut(ZZeta)) {
         let h = bc * SIN36;
         let w = (r * r - h * h).max(0.0).sqrt();
         let c = bc * TAU / 2.0;
-        one_d(x0 - bf * COS72, x1 - bf * COS72, c - w, c + w, &mut |a: ZTau| {
-            f(ZZeta::from_ab(a, b))
-        });
+        one_d(
+            x0 - bf * COS72,
+            x1 - bf * COS72,
+            c - w,
+            c + w,
+            &mut |a: ZTau| f(ZZeta::from_ab(a, b)),
+        );
     });
 }
 

@@ -61,8 +61,18 @@ impl ZZeta {
     /// `(Re x, Im x)` in floating point.
     pub fn to_f64(self) -> (f64, f64) {
         // cos/sin of 0°, 72°, 144°, 216° (i64 → f64 is exact below 2^53).
-        const C: [f64; 4] = [1.0, 0.309_016_994_374_947_45, -0.809_016_994_374_947_5, -0.809_016_994_374_947_5];
-        const S: [f64; 4] = [0.0, SIN72, 0.587_785_252_292_473_1, -0.587_785_252_292_473_1];
+        const C: [f64; 4] = [
+            1.0,
+            0.309_016_994_374_947_45,
+            -0.809_016_994_374_947_5,
+            -0.809_016_994_374_947_5,
+        ];
+        const S: [f64; 4] = [
+            0.0,
+            SIN72,
+            0.587_785_252_292_473_1,
+            -0.587_785_252_292_473_1,
+        ];
         let n = self.0.map(|v| v as f64);
         (
             n[0] * C[0] + n[1] * C[1] + n[2] * C[2] + n[3] * C[3],
@@ -97,7 +107,6 @@ pub fn sign_plus_sin72(u: ZTau, v: ZTau) -> i32 {
     }
 }
 
-
 /// The five linear forms whose absolute values bound a regular decagon with a vertex on
 /// the real axis (edge normals at 18° + 36°k), applied to `x*`: for a point with
 /// `Re = U`, `Im = sin72°·V`, each is `2·(distance to the centre along the normal)/sin72°`
@@ -107,7 +116,7 @@ pub fn decagon_forms(x: ZZeta) -> [ZTau; 5] {
     let u2 = x.re2(); // 2U
     let v = x.im_s(); // V
     let t1 = ZTau::new(-1, 1); // τ − 1
-    // f1 = U + V(τ−1)/2, f2 = U(τ−1) + Vτ/2, f3 = V, f4 = −U(τ−1) + Vτ/2, f5 = −U + V(τ−1)/2 (all ×2)
+                               // f1 = U + V(τ−1)/2, f2 = U(τ−1) + Vτ/2, f3 = V, f4 = −U(τ−1) + Vτ/2, f5 = −U + V(τ−1)/2 (all ×2)
     [
         u2 + v * t1,
         u2 * t1 + v * ZTau::TAU,
@@ -144,7 +153,9 @@ mod tests {
         for _ in 0..5000 {
             let mut n = [0i64; 4];
             for v in &mut n {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 *v = ((s >> 33) % 2001) as i64 - 1000;
             }
             let x = ZZeta::new(n);

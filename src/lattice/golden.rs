@@ -46,12 +46,18 @@ impl ZTau {
 
     /// Galois conjugate `a + b(1 − τ)` (τ ↦ −1/τ).
     pub const fn conj(self) -> Self {
-        ZTau { a: self.a + self.b, b: -self.b }
+        ZTau {
+            a: self.a + self.b,
+            b: -self.b,
+        }
     }
 
     /// Multiplies by an integer.
     pub const fn scale(self, k: i128) -> Self {
-        ZTau { a: self.a * k, b: self.b * k }
+        ZTau {
+            a: self.a * k,
+            b: self.b * k,
+        }
     }
 
     /// `τ^j` for any integer `j` (τ⁻¹ = τ − 1).

@@ -46,7 +46,10 @@ impl Frame {
     pub fn default_for(width: u32, height: u32) -> Self {
         let w = width.min(65535) as i64;
         let h = height.min(65535) as i64;
-        Frame { root_len: FX_ONE as u32, origin: [(-w * (FX_ONE / 2)) as i32, (-(h * FX_ONE) / 3) as i32] }
+        Frame {
+            root_len: FX_ONE as u32,
+            origin: [(-w * (FX_ONE / 2)) as i32, (-(h * FX_ONE) / 3) as i32],
+        }
     }
 
     /// Checks the bounds that keep every integer of the construction in range.
@@ -173,7 +176,11 @@ impl Quasicrystal {
     /// The sequence with an explicit frame.
     pub fn with_frame(width: u32, height: u32, frame: Frame) -> Result<Self, FrameError> {
         frame.validate(width, height)?;
-        Ok(Quasicrystal { width, height, frame })
+        Ok(Quasicrystal {
+            width,
+            height,
+            frame,
+        })
     }
 
     /// The frame in use.
@@ -247,7 +254,12 @@ impl Quasicrystal {
                         run.clear();
                         run.extend(cand[start..end].iter().map(|&(_, n)| {
                             let x = point(n);
-                            (order_key(x.star().norm2()), order_key(x.im_s()), order_key(x.re2()), n)
+                            (
+                                order_key(x.star().norm2()),
+                                order_key(x.im_s()),
+                                order_key(x.re2()),
+                                n,
+                            )
                         }));
                         run.sort_unstable();
                         for (slot, r) in cand[start..end].iter_mut().zip(&run) {
@@ -269,7 +281,10 @@ impl Quasicrystal {
             .iter()
             .map(|&(_, n)| {
                 let x = point(n);
-                Site { lattice: x, pos: self.frame.position(x) }
+                Site {
+                    lattice: x,
+                    pos: self.frame.position(x),
+                }
             })
             .collect()
     }
