@@ -1,10 +1,13 @@
 //! Shepard interpolation: inverse squared distance weighting of the 4 nearest samples.
 //!
 //! The 4 nearest samples are found exactly with a uniform grid over the samples (the sites are
-//! Delone, so a grid of about two samples per cell keeps every query to a 3 × 3 block of cells,
+//! Delone, so a grid of about four samples per cell keeps almost every query to a 3 × 3 block of cells,
 //! widened ring by ring only when the 4th distance cannot be proved final).
 
 use crate::sites::Point;
+
+/// Samples per grid cell (mean).
+const PER_CELL: f64 = 4.0;
 
 /// A uniform bucket grid over sample positions (source pixels), cells in row-major order.
 #[derive(Clone, Debug)]
@@ -78,10 +81,10 @@ impl Grid {
             (xmin, ymin, xmax, ymax) = (0.0, 0.0, 0.0, 0.0);
         }
         let (bw, bh) = (xmax - xmin, ymax - ymin);
-        // About two samples per cell.
-        let mut cs = (bw * bh * 2.0 / n as f64).sqrt();
+        // About PER_CELL samples per cell.
+        let mut cs = (bw * bh * PER_CELL / n as f64).sqrt();
         if !(cs.is_finite() && cs > 0.0) {
-            cs = bw.max(bh) * 2.0 / n as f64;
+            cs = bw.max(bh) * PER_CELL / n as f64;
         }
         if !(cs.is_finite() && cs > 0.0) {
             cs = 1.0;
