@@ -1,8 +1,62 @@
 //! Samples → picture, at any output size and from any prefix.
 //!
-//! STUB (to be replaced by the reconstruction work): nearest-sample rendering by brute force.
+//! # Coordinates
+//!
+//! Sample positions are in source pixels: pixel `(i, j)` covers `[i, i+1) × [j, j+1)` and its
+//! centre is `(i + 0.5, j + 0.5)`. A render at `w × h` from a `W × H` source samples the output
+//! pixel centres; source coordinates map to output ones by `x · w / W`, `y · h / H`. Every
+//! method defines one continuous picture on the source plane and samples it, so all output
+//! sizes show the same picture: Gouraud (affine-invariant) is rasterised in output pixels, and
+//! Shepard and natural-neighbour weights, like the outside-the-hull rule, are computed at the
+//! output pixel centre mapped back to source pixels.
+//!
+//! # Outside the convex hull
+//!
+//! Gouraud and natural neighbour are only defined inside the convex hull of the samples. A
+//! pixel centre outside it takes the colour of the **nearest point of the hull boundary**
+//! (distance in source pixels), colours being linear along each hull edge between its two end
+//! samples. This continues the interpolation without a seam and leaves no black border. With
+//! one sample the whole picture takes its colour; with two (or all collinear) the boundary is
+//! the polyline through them. With no sample every pixel is mid-grey (128).
+//!
+//! # Rounding
+//!
+//! Every channel is rounded to nearest (halves up) and clamped to 0..=255.
+//!
+//! ```
+//! use qcs::reconstruction::{render, Method};
+//! // Three samples of a 4 × 4 source, rendered at 8 × 8.
+//! let pos = [[0.5, 0.5], [3.5, 0.5], [0.5, 3.5]];
+//! let col = [0u8, 90, 30];
+//! let img = render((4, 4), 1, &pos, &col, Method::Gouraud, 8, 8);
+//! assert_eq!(img.len(), 64);
+//! assert_eq!(img[0], 0); // pixel centre (0.25, 0.25) in source pixels, outside the hull
+//! ```
+
+// Per-channel loops over fixed-size colour arrays read best with indices.
+#![allow(clippy::needless_range_loop)]
+
+mod gouraud;
+mod hull;
+mod mesh;
+mod natural;
+mod raster;
+mod shepard;
+
+use rayon::prelude::*;
+use spade::Triangulation as _;
 
 use crate::sites::Point;
+
+pub use gouraud::triangles;
+pub use mesh::{Triangulation, Vertex};
+#[doc(hidden)]
+pub use raster::raster_coverage;
+pub use raster::{rasterise, RasterTriangle, RasterVertex};
+pub use shepard::Grid;
+
+use hull::Boundary;
+use raster::Band;
 
 /// How a picture is rebuilt from its samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -15,7 +69,59 @@ pub enum Method {
     Natural,
 }
 
+/// Options of [`SampleSet::render_with`] and [`render_with`].
+///
+/// ```
+/// use qcs::reconstruction::RenderOptions;
+/// let single = RenderOptions::default().with_parallel(false);
+/// assert!(RenderOptions::default().parallel && !single.parallel);
+/// assert_eq!(single, RenderOptions::single_threaded());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub struct RenderOptions {
+    /// Split the output into bands of rows rendered on the `rayon` thread pool (default true).
+    /// The picture is the same either way.
+    pub parallel: bool,
+}
+
+impl RenderOptions {
+    /// The options with `parallel` set.
+    pub fn with_parallel(mut self, parallel: bool) -> Self {
+        self.parallel = parallel;
+        self
+    }
+
+    /// Default options on the calling thread only.
+    pub fn single_threaded() -> Self {
+        RenderOptions::default().with_parallel(false)
+    }
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions { parallel: true }
+    }
+}
+
 /// A growing set of samples of one source image.
+///
+/// Samples are pushed a few at a time (as a streaming decoder reads them) and the set can be
+/// rendered in between. The Delaunay triangulation is kept and the new samples are inserted
+/// lazily at the next render (an empty triangulation is bulk loaded); the Shepard grid is
+/// rebuilt only when samples were added since the last Shepard render.
+///
+/// ```
+/// use qcs::reconstruction::{Method, SampleSet};
+/// let mut set = SampleSet::new(16, 16, 3);
+/// assert_eq!(set.render(Method::Gouraud, 2, 2), vec![128; 12]); // no sample: mid-grey
+/// set.push([4.0, 4.0], &[200, 100, 0]);
+/// assert_eq!(set.render(Method::Shepard, 2, 2), [200, 100, 0].repeat(4)); // one: its colour
+/// set.push([12.0, 4.0], &[200, 100, 0]);
+/// set.push([8.0, 12.0], &[200, 100, 0]);
+/// assert_eq!(set.len(), 3);
+/// assert_eq!(set.render(Method::Natural, 3, 3), [200, 100, 0].repeat(9));
+/// ```
 #[derive(Clone, Debug)]
 pub struct SampleSet {
     width: u32,
@@ -23,60 +129,177 @@ pub struct SampleSet {
     channels: usize,
     positions: Vec<Point>,
     colours: Vec<u8>,
+    mesh: Triangulation,
+    synced: usize,
+    grid: Option<Grid>,
 }
 
 impl SampleSet {
-    /// An empty set for a `width × height` source with `channels` (1, 3 or 4) per colour.
-    pub fn new(width: u32, height: u32, channels: usize) -> Self {
+    /// An empty set for a `source_width × source_height` source with `channels` bytes per colour
+    /// (1..=4; other values are clamped into that range).
+    pub fn new(source_width: u32, source_height: u32, channels: usize) -> Self {
         SampleSet {
-            width,
-            height,
-            channels,
+            width: source_width,
+            height: source_height,
+            channels: channels.clamp(1, 4),
             positions: Vec::new(),
             colours: Vec::new(),
+            mesh: Triangulation::new(),
+            synced: 0,
+            grid: None,
         }
     }
-    /// Adds one sample (position in source pixels, `channels` colour bytes).
+
+    /// Adds one sample: position in source pixels, `channels` colour bytes.
+    ///
+    /// A position that cannot be triangulated (NaN, ±∞, beyond ±2^200) is ignored; use
+    /// [`SampleSet::try_push`] to be told. Missing colour bytes count as 0, extra ones are ignored.
     pub fn push(&mut self, pos: Point, colour: &[u8]) {
-        self.positions.push(pos);
-        self.colours.extend_from_slice(&colour[..self.channels]);
+        let _ = self.try_push(pos, colour);
     }
+
+    /// Adds one sample like [`SampleSet::push`], or returns an error (and adds nothing) if the
+    /// position cannot be triangulated.
+    ///
+    /// ```
+    /// let mut set = qcs::reconstruction::SampleSet::new(8, 8, 1);
+    /// assert!(set.try_push([1.0, 2.0], &[7]).is_ok());
+    /// assert!(set.try_push([f64::NAN, 2.0], &[7]).is_err());
+    /// assert_eq!(set.len(), 1);
+    /// ```
+    pub fn try_push(&mut self, pos: Point, colour: &[u8]) -> crate::Result<()> {
+        let Some(p) = mesh::sanitize(pos) else {
+            return Err(crate::Error::Parameter(format!(
+                "sample position {pos:?} is not usable"
+            )));
+        };
+        self.positions.push(p);
+        for k in 0..self.channels {
+            self.colours.push(colour.get(k).copied().unwrap_or(0));
+        }
+        Ok(())
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.positions.len()
     }
+
     /// Whether there are no samples.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
     }
-    /// Renders a `width × height` picture, interleaved, `channels` bytes per pixel.
-    pub fn render(&mut self, _method: Method, width: u32, height: u32) -> Vec<u8> {
-        let c = self.channels;
-        let mut out = vec![0u8; width as usize * height as usize * c];
-        if self.positions.is_empty() {
-            return out;
+
+    /// Bytes per colour.
+    pub fn channels(&self) -> usize {
+        self.channels
+    }
+
+    /// Source size `(width, height)` in pixels.
+    pub fn source_size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Sample positions in push order (source pixels).
+    pub fn positions(&self) -> &[Point] {
+        &self.positions
+    }
+
+    /// Sample colours in push order, `channels()` bytes each.
+    pub fn colours(&self) -> &[u8] {
+        &self.colours
+    }
+
+    /// The Delaunay triangulation of all samples pushed so far (inserting pending ones).
+    /// Vertex data carry the sample index; of samples with equal positions only the first is a vertex.
+    ///
+    /// ```
+    /// use qcs::reconstruction::SampleSet;
+    /// use spade::Triangulation;
+    /// let mut set = SampleSet::new(8, 8, 1);
+    /// for p in [[1.0, 1.0], [6.0, 1.0], [1.0, 6.0], [6.0, 6.0], [1.0, 1.0]] {
+    ///     set.push(p, &[0]);
+    /// }
+    /// let t = set.triangulation();
+    /// assert_eq!((t.num_vertices(), t.num_inner_faces()), (4, 2));
+    /// ```
+    pub fn triangulation(&mut self) -> &Triangulation {
+        mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
+        &self.mesh
+    }
+
+    /// Renders a `width × height` picture, interleaved, `channels` bytes per pixel, in parallel.
+    pub fn render(&mut self, method: Method, width: u32, height: u32) -> Vec<u8> {
+        self.render_with(method, width, height, RenderOptions::default())
+    }
+
+    /// Renders like [`SampleSet::render`] with `options` (e.g. single-threaded).
+    ///
+    /// ```
+    /// use qcs::reconstruction::{Method, RenderOptions, SampleSet};
+    /// let mut set = SampleSet::new(4, 4, 1);
+    /// for (p, c) in [([0.5, 0.5], 0), ([3.5, 0.5], 60), ([0.5, 3.5], 0), ([3.5, 3.5], 60)] {
+    ///     set.push(p, &[c]);
+    /// }
+    /// let single = RenderOptions::single_threaded();
+    /// let a = set.render_with(Method::Gouraud, 4, 4, single);
+    /// assert_eq!(&a[..4], &[0, 20, 40, 60]);
+    /// assert_eq!(a, set.render(Method::Gouraud, 4, 4));
+    /// ```
+    pub fn render_with(
+        &mut self,
+        method: Method,
+        width: u32,
+        height: u32,
+        options: RenderOptions,
+    ) -> Vec<u8> {
+        let (w, h, c) = (width as usize, height as usize, self.channels);
+        if w == 0 || h == 0 {
+            return Vec::new();
         }
-        let sx = self.width as f64 / width as f64;
-        let sy = self.height as f64 / height as f64;
-        for j in 0..height as usize {
-            for i in 0..width as usize {
-                let p = [(i as f64 + 0.5) * sx, (j as f64 + 0.5) * sy];
-                let mut best = (f64::INFINITY, 0);
-                for (k, q) in self.positions.iter().enumerate() {
-                    let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-                    if d < best.0 {
-                        best = (d, k);
-                    }
+        if self.positions.is_empty() {
+            return vec![128; w * h * c];
+        }
+        let frame = Frame {
+            width: w,
+            height: h,
+            channels: c,
+            colours: &self.colours,
+            sx: self.width.max(1) as f64 / width as f64,
+            sy: self.height.max(1) as f64 / height as f64,
+        };
+        match method {
+            Method::Gouraud => {
+                mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
+                gouraud::render(&self.mesh, &frame, options.parallel)
+            }
+            Method::Natural => {
+                mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
+                natural::render(&self.mesh, &frame, options.parallel)
+            }
+            Method::Shepard => {
+                if self.grid.as_ref().map(Grid::len) != Some(self.positions.len()) {
+                    self.grid = Some(Grid::new(&self.positions));
                 }
-                let o = (j * width as usize + i) * c;
-                out[o..o + c].copy_from_slice(&self.colours[best.1 * c..best.1 * c + c]);
+                let grid = match &self.grid {
+                    Some(g) => g,
+                    None => return vec![128; w * h * c],
+                };
+                let colours = frame.colours;
+                per_pixel(
+                    &frame,
+                    options.parallel,
+                    || (),
+                    |_, q| shepard::colour_at(grid, colours, c, q),
+                )
             }
         }
-        out
     }
 }
 
 /// One-shot render of `positions` (source pixels) with `colours` (`channels` bytes each).
+///
+/// Same rules as [`SampleSet`] (missing colour bytes count as 0); the triangulation is bulk loaded.
 pub fn render(
     source: (u32, u32),
     channels: usize,
@@ -86,9 +309,141 @@ pub fn render(
     width: u32,
     height: u32,
 ) -> Vec<u8> {
+    render_with(
+        source,
+        channels,
+        positions,
+        colours,
+        method,
+        width,
+        height,
+        RenderOptions::default(),
+    )
+}
+
+/// [`render`] with `options`.
+///
+/// ```
+/// use qcs::reconstruction::{render_with, Method, RenderOptions};
+/// let single = RenderOptions::single_threaded();
+/// let img = render_with((2, 2), 1, &[[1.0, 1.0]], &[9], Method::Shepard, 3, 3, single);
+/// assert_eq!(img, vec![9; 9]);
+/// ```
+#[allow(clippy::too_many_arguments)]
+pub fn render_with(
+    source: (u32, u32),
+    channels: usize,
+    positions: &[Point],
+    colours: &[u8],
+    method: Method,
+    width: u32,
+    height: u32,
+    options: RenderOptions,
+) -> Vec<u8> {
     let mut set = SampleSet::new(source.0, source.1, channels);
+    let c = set.channels;
     for (k, p) in positions.iter().enumerate() {
-        set.push(*p, &colours[k * channels..k * channels + channels]);
+        let col = colours.get(k * channels..).unwrap_or(&[]);
+        set.push(*p, &col[..col.len().min(c)]);
     }
-    set.render(method, width, height)
+    set.render_with(method, width, height, options)
+}
+
+/// What every method needs to know about the output.
+pub(crate) struct Frame<'a> {
+    pub(crate) width: usize,
+    pub(crate) height: usize,
+    pub(crate) channels: usize,
+    pub(crate) colours: &'a [u8],
+    /// Output → source scale (`W / w`, `H / h`).
+    pub(crate) sx: f64,
+    pub(crate) sy: f64,
+}
+
+impl Frame<'_> {
+    /// Centre of output pixel `(i, j)` in source pixels.
+    #[inline]
+    pub(crate) fn source_point(&self, i: usize, j: usize) -> Point {
+        [(i as f64 + 0.5) * self.sx, (j as f64 + 0.5) * self.sy]
+    }
+}
+
+/// Rows per band for the parallel paths.
+pub(crate) fn band_rows(height: usize) -> usize {
+    let threads = rayon::current_num_threads().max(1);
+    (height / (threads * 8)).clamp(4, 64)
+}
+
+#[inline]
+fn store(px: &mut [u8], colour: [f32; 4]) {
+    for (p, v) in px.iter_mut().zip(colour) {
+        // Saturating cast: round half up, clamp to 0..=255 (NaN → 0).
+        *p = (v + 0.5) as u8;
+    }
+}
+
+/// Paints the pixels of `band` that no triangle claimed, by the outside-the-hull rule.
+pub(crate) fn fill_unpainted(band: &mut Band<'_>, frame: &Frame<'_>, boundary: &Boundary) {
+    let (w, c) = (band.width, band.channels);
+    let mut hint = 0usize;
+    for r in 0..band.rows {
+        for i in 0..w {
+            if band.painted[r * w + i] {
+                continue;
+            }
+            let q = frame.source_point(i, band.row0 + r);
+            let col = if boundary.is_empty() {
+                [128.0; 4]
+            } else {
+                boundary.colour(q, &mut hint)
+            };
+            let o = (r * w + i) * c;
+            store(&mut band.pixels[o..o + c], col);
+        }
+    }
+}
+
+/// Renders by evaluating `f` at every pixel centre (in source pixels), with per-band state `S`.
+pub(crate) fn per_pixel<S, M, F>(frame: &Frame<'_>, parallel: bool, make: M, f: F) -> Vec<u8>
+where
+    M: Fn() -> S + Sync,
+    F: Fn(&mut S, Point) -> [f32; 4] + Sync,
+{
+    let (w, h, c) = (frame.width, frame.height, frame.channels);
+    let mut out = vec![0u8; w * h * c];
+    let run = |row0: usize, chunk: &mut [u8]| {
+        let mut state = make();
+        for (r, line) in chunk.chunks_exact_mut(w * c).enumerate() {
+            for (i, px) in line.chunks_exact_mut(c).enumerate() {
+                store(px, f(&mut state, frame.source_point(i, row0 + r)));
+            }
+        }
+    };
+    if parallel {
+        let rows = band_rows(h);
+        out.par_chunks_mut(rows * w * c)
+            .enumerate()
+            .for_each(|(b, chunk)| run(b * rows, chunk));
+    } else {
+        run(0, &mut out);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn incremental_sync_keeps_first_duplicate() {
+        let mut set = SampleSet::new(8, 8, 1);
+        set.push([1.0, 1.0], &[10]);
+        set.push([6.0, 1.0], &[10]);
+        set.push([1.0, 6.0], &[10]);
+        let _ = set.triangulation();
+        set.push([1.0, 1.0], &[250]);
+        let t = set.triangulation();
+        assert_eq!(t.num_vertices(), 3);
+        assert!(t.vertices().all(|v| v.data().index < 3));
+    }
 }

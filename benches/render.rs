@@ -1,0 +1,159 @@
+//! Rendering cost at 1 Mpixel (1024 × 1024), single-threaded, against JPEG decoding.
+//!
+//! Sites: a jittered grid (the quasicrystal sampler is developed in parallel), colour = the
+//! pixel of `assets/rocket.png` (resized to 1024 × 1024) containing the site.
+//!
+//! Run: `cargo bench --bench render -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+use std::io::Cursor;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use image::codecs::jpeg::JpegEncoder;
+use image::{imageops::FilterType, ImageEncoder, RgbImage};
+use qcs::reconstruction::{Grid, Method, RenderOptions, SampleSet, Triangulation, Vertex};
+use spade::{Point2, Triangulation as _};
+
+const SIDE: u32 = 1024;
+const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
+
+fn photo() -> RgbImage {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let img = image::open(path).expect("assets/rocket.png").to_rgb8();
+    image::imageops::resize(&img, SIDE, SIDE, FilterType::Triangle)
+}
+
+/// A jittered `k × k` grid over the picture (k² = n), deterministic.
+fn jittered(n: usize) -> Vec<[f64; 2]> {
+    let k = (n as f64).sqrt().round() as usize;
+    let cell = SIDE as f64 / k as f64;
+    let mut s = 0x1234_5678_9ABC_DEF0u64;
+    let mut rnd = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut out = Vec::with_capacity(k * k);
+    for j in 0..k {
+        for i in 0..k {
+            out.push([(i as f64 + rnd()) * cell, (j as f64 + rnd()) * cell]);
+        }
+    }
+    out
+}
+
+fn sample_set(img: &RgbImage, sites: &[[f64; 2]]) -> SampleSet {
+    let mut set = SampleSet::new(SIDE, SIDE, 3);
+    for p in sites {
+        let (x, y) = ((p[0] as u32).min(SIDE - 1), (p[1] as u32).min(SIDE - 1));
+        set.push(*p, &img.get_pixel(x, y).0);
+    }
+    set
+}
+
+/// Baseline JPEG (image's encoder) with the quality whose size is closest to `target` bytes.
+fn jpeg_near(img: &RgbImage, target: usize, progressive: bool) -> (Vec<u8>, u8) {
+    let encode = |q: u8| {
+        let mut buf = Vec::new();
+        if progressive {
+            let mut enc = jpeg_encoder::Encoder::new(&mut buf, q);
+            enc.set_progressive(true);
+            enc.encode(
+                img.as_raw(),
+                SIDE as u16,
+                SIDE as u16,
+                jpeg_encoder::ColorType::Rgb,
+            )
+            .expect("progressive jpeg");
+        } else {
+            JpegEncoder::new_with_quality(Cursor::new(&mut buf), q)
+                .write_image(img.as_raw(), SIDE, SIDE, image::ExtendedColorType::Rgb8)
+                .expect("jpeg");
+        }
+        buf
+    };
+    (1..=100u8)
+        .map(|q| (encode(q), q))
+        .min_by_key(|(b, _)| b.len().abs_diff(target))
+        .expect("a quality")
+}
+
+fn bench(c: &mut Criterion) {
+    let img = photo();
+    let single = RenderOptions::single_threaded();
+    let pixels = (SIDE * SIDE) as u64;
+
+    let mut tri = c.benchmark_group("triangulate");
+    tri.sample_size(10);
+    for &n in &COUNTS {
+        let sites = jittered(n);
+        tri.throughput(Throughput::Elements(n as u64));
+        tri.bench_with_input(BenchmarkId::new("spade_bulk_load", n), &sites, |b, s| {
+            b.iter(|| {
+                let v: Vec<Vertex> = s
+                    .iter()
+                    .enumerate()
+                    .map(|(k, p)| Vertex {
+                        position: Point2::new(p[0], p[1]),
+                        index: k as u32,
+                    })
+                    .collect();
+                black_box(Triangulation::bulk_load(v).map(|t| t.num_inner_faces()))
+            })
+        });
+        tri.bench_with_input(BenchmarkId::new("sample_set_stable", n), &sites, |b, s| {
+            b.iter(|| {
+                let mut set = sample_set(&img, s);
+                black_box(set.triangulation().num_inner_faces())
+            })
+        });
+        tri.bench_with_input(BenchmarkId::new("shepard_grid", n), &sites, |b, s| {
+            b.iter(|| black_box(Grid::new(s).len()))
+        });
+    }
+    tri.finish();
+
+    let mut ras = c.benchmark_group("render_1mpx_single");
+    ras.sample_size(10);
+    ras.throughput(Throughput::Elements(pixels));
+    for &n in &COUNTS {
+        let sites = jittered(n);
+        let mut set = sample_set(&img, &sites);
+        let _ = set.triangulation();
+        let _ = set.render_with(Method::Shepard, 8, 8, single); // builds the grid
+        ras.bench_function(BenchmarkId::new("gouraud", n), |b| {
+            b.iter(|| black_box(set.render_with(Method::Gouraud, SIDE, SIDE, single)))
+        });
+        ras.bench_function(BenchmarkId::new("shepard", n), |b| {
+            b.iter(|| black_box(set.render_with(Method::Shepard, SIDE, SIDE, single)))
+        });
+    }
+    ras.finish();
+
+    let mut dec = c.benchmark_group("jpeg_decode_1mpx");
+    dec.sample_size(10);
+    dec.throughput(Throughput::Elements(pixels));
+    for &n in &COUNTS {
+        for progressive in [false, true] {
+            let (jpeg, q) = jpeg_near(&img, 3 * n, progressive);
+            let name = if progressive {
+                "progressive"
+            } else {
+                "baseline"
+            };
+            eprintln!(
+                "{name} JPEG for {n} samples: quality {q}, {} bytes (raw qcs ≈ {})",
+                jpeg.len(),
+                3 * n
+            );
+            dec.bench_function(BenchmarkId::new(name, n), |b| {
+                b.iter(|| black_box(image::load_from_memory(&jpeg).map(|i| i.width())))
+            });
+        }
+    }
+    dec.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
