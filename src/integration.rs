@@ -1,0 +1,112 @@
+//! `image` crate integration: an [`image::ImageDecoder`] for `.qcs`, and registration through
+//! `image`'s decoding hooks so that `image::open("photo.qcs")` works.
+
+use crate::container::{Header, Layout};
+use crate::{decode, DecodeOptions, Error, Limits, StreamDecoder};
+use image::error::{DecodingError, ImageFormatHint, LimitError, LimitErrorKind};
+use image::{ColorType, ImageDecoder, ImageError, ImageResult};
+use std::io::Read;
+
+/// Largest `.qcs` file [`QcsImageDecoder`] reads into memory (1 GiB).
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+fn to_image_error(e: Error) -> ImageError {
+    match e {
+        Error::Io(e) => ImageError::IoError(e),
+        Error::Limits(_) => ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory)),
+        other => ImageError::Decoding(DecodingError::new(ImageFormatHint::Name("qcs".into()), other)),
+    }
+}
+
+/// Decodes a whole `.qcs` stream for the `image` crate (Gouraud, at the file's own size).
+///
+/// ```
+/// use image::ImageDecoder;
+/// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(16, 8, image::Rgb([9, 99, 199])));
+/// let bytes = qcs::encode(&img, &Default::default())?;
+/// let dec = qcs::QcsImageDecoder::new(std::io::Cursor::new(bytes))?;
+/// assert_eq!(dec.dimensions(), (16, 8));
+/// let back = image::DynamicImage::from_decoder(dec)?;
+/// assert_eq!(back.to_rgb8().get_pixel(3, 3).0, [9, 99, 199]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct QcsImageDecoder {
+    bytes: Vec<u8>,
+    header: Header,
+    limits: Limits,
+}
+
+impl QcsImageDecoder {
+    /// Reads the stream (at most [`MAX_FILE_BYTES`]) and parses its header.
+    pub fn new<R: Read>(reader: R) -> ImageResult<Self> {
+        let mut bytes = Vec::new();
+        reader.take(MAX_FILE_BYTES).read_to_end(&mut bytes)?;
+        let limits = Limits::default();
+        let mut d = StreamDecoder::new(limits.clone());
+        let head = bytes.len().min(crate::container::MAX_HEADER_LEN);
+        d.push(&bytes[..head]).map_err(to_image_error)?;
+        let header = d.header().cloned().ok_or_else(|| to_image_error(Error::NeedMoreData))?;
+        Ok(QcsImageDecoder { bytes, header, limits })
+    }
+}
+
+impl ImageDecoder for QcsImageDecoder {
+    fn dimensions(&self) -> (u32, u32) {
+        (self.header.width, self.header.height)
+    }
+
+    fn color_type(&self) -> ColorType {
+        match self.header.layout {
+            Layout::Grey => ColorType::L8,
+            Layout::GreyAlpha => ColorType::La8,
+            Layout::Rgb => ColorType::Rgb8,
+            Layout::Rgba => ColorType::Rgba8,
+        }
+    }
+
+    fn set_limits(&mut self, limits: image::Limits) -> ImageResult<()> {
+        limits.check_dimensions(self.header.width, self.header.height)?;
+        if let Some(w) = limits.max_image_width {
+            self.limits.max_dimension = self.limits.max_dimension.min(w);
+        }
+        if let Some(h) = limits.max_image_height {
+            self.limits.max_dimension = self.limits.max_dimension.min(h);
+        }
+        if let Some(bytes) = limits.max_alloc {
+            let px = bytes / self.color_type().bytes_per_pixel() as u64;
+            self.limits.max_output_pixels = self.limits.max_output_pixels.min(px);
+        }
+        Ok(())
+    }
+
+    fn read_image(self, buf: &mut [u8]) -> ImageResult<()> {
+        let opts = DecodeOptions { limits: self.limits.clone(), ..Default::default() };
+        let d = decode(&self.bytes, &opts).map_err(to_image_error)?;
+        buf.copy_from_slice(d.image.as_bytes());
+        Ok(())
+    }
+
+    fn read_image_boxed(self: Box<Self>, buf: &mut [u8]) -> ImageResult<()> {
+        (*self).read_image(buf)
+    }
+}
+
+/// Registers `.qcs` with the `image` crate: by extension and by signature (`qcs` + version 1).
+/// Returns `false` if a decoder for the extension was already registered.
+///
+/// ```
+/// qcs::register_image_hooks();
+/// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_pixel(8, 8, image::Luma([77])));
+/// let path = std::env::temp_dir().join("qcs-doc-hook.qcs");
+/// std::fs::write(&path, qcs::encode(&img, &Default::default())?)?;
+/// let back = image::open(&path)?;
+/// assert_eq!(back.to_luma8().get_pixel(4, 4).0, [77]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn register_image_hooks() -> bool {
+    image::hooks::register_format_detection_hook("qcs".into(), b"qcs\x01", None);
+    image::hooks::register_decoding_hook(
+        "qcs".into(),
+        Box::new(|r| Ok(Box::new(QcsImageDecoder::new(r)?))),
+    )
+}
