@@ -13,15 +13,15 @@
 //! [`reconstruction`] (samples → picture at any size) and [`styles`].
 #![forbid(unsafe_code)]
 
+pub mod coding;
+pub mod container;
 pub mod error;
+pub mod eval;
 pub mod lattice;
 pub mod limits;
-pub mod sites;
 pub mod reconstruction;
-pub mod container;
-pub mod coding;
+pub mod sites;
 pub mod styles;
-pub mod eval;
 
 pub use error::{Error, Result};
 pub use limits::Limits;

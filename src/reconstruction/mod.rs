@@ -28,7 +28,13 @@ pub struct SampleSet {
 impl SampleSet {
     /// An empty set for a `width × height` source with `channels` (1, 3 or 4) per colour.
     pub fn new(width: u32, height: u32, channels: usize) -> Self {
-        SampleSet { width, height, channels, positions: Vec::new(), colours: Vec::new() }
+        SampleSet {
+            width,
+            height,
+            channels,
+            positions: Vec::new(),
+            colours: Vec::new(),
+        }
     }
     /// Adds one sample (position in source pixels, `channels` colour bytes).
     pub fn push(&mut self, pos: Point, colour: &[u8]) {
