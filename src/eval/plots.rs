@@ -87,6 +87,28 @@ where
             .draw()
             .map_err(err)?;
     }
+    // Guides drawn as data, so the label-less PNG has them too: every whole dB
+    // (every 5 dB on tall ranges) and the square counts (2^k+1)².
+    let grey = RGBColor(215, 215, 215);
+    let step = if y1 - y0 > 20.0 { 5.0 } else { 1.0 };
+    let mut y = (y0 / step).ceil() * step;
+    while y <= y1 {
+        chart
+            .draw_series(LineSeries::new([(x0, y), (x1, y)], grey))
+            .map_err(err)?;
+        y += step;
+    }
+    for k in 0..16 {
+        let sq = (((1u64 << k) + 1) * ((1u64 << k) + 1)) as f64;
+        if sq >= x0 && sq <= x1 {
+            chart
+                .draw_series(LineSeries::new(
+                    [(sq, y0), (sq, y1)],
+                    RGBColor(180, 180, 230),
+                ))
+                .map_err(err)?;
+        }
+    }
     for (k, (name, curve)) in series.iter().enumerate() {
         let colour = PALETTE[k % PALETTE.len()];
         let pts: Vec<(f64, f64)> = curve.iter().map(|&(n, p)| (n as f64, p)).collect();
@@ -116,7 +138,8 @@ where
 
 /// Writes the curves as an SVG with title, axes labels and legend, and as a PNG
 /// with the same lines and colours but no text (the bitmap backend has no font
-/// without the `ttf`/`ab_glyph` features; `index.html` shows the SVG).
+/// without the `ttf`/`ab_glyph` features; `index.html` shows the SVG). Both
+/// show grey lines at whole dB and blue lines at the square counts.
 pub(crate) fn curves(
     svg: &Path,
     png: &Path,
