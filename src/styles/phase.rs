@@ -94,8 +94,8 @@ fn check_size(size: (u32, u32)) -> Result<()> {
 }
 
 /// Contour map of the phase function over `window` at `size`: a blue (−10) –
-/// white (0) – red (+10) colour ramp with dark contour lines at the odd levels
-/// −9, −7, …, 9. `f` oscillates with wavelength down to `1/(2τ⁴) ≈ 0.073` lattice
+/// white (0) – red (+10) colour ramp with dark contour lines at the levels
+/// −6, −2, 2, 6. `f` oscillates with wavelength down to `1/(2τ⁴) ≈ 0.073` lattice
 /// units, so give at least ~100 pixels per unit (windows of a few units).
 ///
 /// ```
@@ -111,7 +111,7 @@ pub fn phase_contour(window: PhaseWindow, size: (u32, u32)) -> Result<RgbImage> 
         .flat_map(|j| (0..w).map(move |i| (i, j)))
         .map(|(i, j)| phase_value(window.point(i, j, w, h)))
         .collect();
-    let band = |v: f64| ((v + 1.0) / 2.0).floor() as i64;
+    let band = |v: f64| ((v + 2.0) / 4.0).floor() as i64;
     Ok(RgbImage::from_fn(w, h, |i, j| {
         let k = (j * w + i) as usize;
         let v = values[k];
