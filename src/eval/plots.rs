@@ -18,6 +18,12 @@ pub(crate) const PALETTE: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
+/// The series colour of sampler number `k`, as `#rrggbb` (for the HTML legend).
+pub(crate) fn colour_hex(k: usize) -> String {
+    let RGBColor(r, g, b) = PALETTE[k % PALETTE.len()];
+    format!("#{r:02x}{g:02x}{b:02x}")
+}
+
 fn err<E: std::fmt::Display>(e: E) -> Error {
     Error::Io(std::io::Error::other(format!("plot: {e}")))
 }

@@ -59,6 +59,16 @@ fn fmt_holds(h: Option<bool>) -> &'static str {
     }
 }
 
+#[cfg(feature = "cli")]
+fn legend_colour(k: usize) -> String {
+    super::plots::colour_hex(k)
+}
+
+#[cfg(not(feature = "cli"))]
+fn legend_colour(_k: usize) -> String {
+    String::from("#000")
+}
+
 fn is_square_count(n: usize) -> bool {
     (0..31).any(|k| ((1usize << k) + 1).pow(2) == n)
 }
@@ -502,6 +512,17 @@ impl Report {
         h.push_str("</table>\n<h2>PSNR vs number of samples</h2>\n");
         if plots.is_empty() {
             h.push_str("<p>(plots need the <code>cli</code> feature)</p>\n");
+        } else {
+            h.push_str("<p>Colours: ");
+            for (k, s) in self.samplers.iter().enumerate() {
+                let _ = write!(
+                    h,
+                    "<b style=\"color:{}\">━ {}</b> ",
+                    legend_colour(k),
+                    esc(s)
+                );
+            }
+            h.push_str("; grey lines every dB (5 dB on tall ranges), blue lines at the square counts (2^k+1)².</p>\n");
         }
         for p in plots {
             let _ = writeln!(

@@ -8,7 +8,7 @@ use crate::sites::Point;
 use crate::{Error, Result};
 
 /// Largest spectrum grid side accepted.
-const MAX_N: usize = 4096;
+const MAX_N: usize = 2048;
 
 /// The power spectrum `|F(u, v)|² / N` of the sites splatted into an `n × n`
 /// grid, DC centred: entry `(v + n/2) mod n` row, `(u + n/2) mod n` column, row-major.
@@ -16,7 +16,7 @@ const MAX_N: usize = 4096;
 /// Each site adds 1 to the grid cell `(⌊x·n/W⌋, ⌊y·n/H⌋)` (so the grid has one
 /// cell per source pixel when `n = W = H`); the 2D FFT (`rustfft`) of that grid
 /// gives `F`. Dividing by the site count `N` makes white noise average 1 and the DC
-/// value equal `N`. Frequencies are in cycles per image. `n` must be in `2..=4096`.
+/// value equal `N`. Frequencies are in cycles per image. `n` must be in `2..=2048`.
 ///
 /// ```
 /// let p = qcs::styles::power_spectrum(&[[0.5, 0.5], [5.5, 3.5]], (8, 8), 8).unwrap();
