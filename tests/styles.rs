@@ -459,3 +459,33 @@ fn phase_function_is_real_symmetric_and_contains_the_sites() {
     )
     .is_err());
 }
+
+#[test]
+fn canonical_cells_merge_cocircular_triangles_only() {
+    // A regular pentagon (5 cocircular sites) is one cell of 5 vertices.
+    let pent: Vec<Point> = (0..5)
+        .map(|k| {
+            let a = 2.0 * std::f64::consts::PI * k as f64 / 5.0;
+            [50.0 + 20.0 * a.cos(), 50.0 + 20.0 * a.sin()]
+        })
+        .collect();
+    let t = styles::Triangulation::new(&pent).unwrap();
+    let cells = t.cells();
+    assert_eq!(cells.len(), 1);
+    let mut c = cells[0].clone();
+    c.sort_unstable();
+    assert_eq!(c, vec![0, 1, 2, 3, 4]);
+    assert_eq!(t.triangles().len(), 3);
+    // The 9×9 periodic grid: 64 square cells.
+    let grid = Periodic.sites(129, 129, 81);
+    let cells = styles::Triangulation::new(&grid).unwrap().cells();
+    assert_eq!(cells.len(), 64);
+    assert!(cells.iter().all(|c| c.len() == 4));
+    // Random sites: no cocircular quadruples, so cells are the Delaunay triangles.
+    let r = Random { seed: 8 }.sites(100, 100, 300);
+    let t = styles::Triangulation::new(&r).unwrap();
+    assert!(t.cells().iter().all(|c| c.len() == 3));
+    // Duplicated sites are merged, not a failure.
+    let dup = [[1.0, 1.0], [1.0, 1.0], [5.0, 1.0], [1.0, 5.0]];
+    assert_eq!(styles::Triangulation::new(&dup).unwrap().cells().len(), 1);
+}
