@@ -13,8 +13,13 @@ pub const MAX_FILE_BYTES: u64 = 1 << 30;
 fn to_image_error(e: Error) -> ImageError {
     match e {
         Error::Io(e) => ImageError::IoError(e),
-        Error::Limits(_) => ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory)),
-        other => ImageError::Decoding(DecodingError::new(ImageFormatHint::Name("qcs".into()), other)),
+        Error::Limits(_) => {
+            ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory))
+        }
+        other => ImageError::Decoding(DecodingError::new(
+            ImageFormatHint::Name("qcs".into()),
+            other,
+        )),
     }
 }
 
@@ -45,8 +50,15 @@ impl QcsImageDecoder {
         let mut d = StreamDecoder::new(limits.clone());
         let head = bytes.len().min(crate::container::MAX_HEADER_LEN);
         d.push(&bytes[..head]).map_err(to_image_error)?;
-        let header = d.header().cloned().ok_or_else(|| to_image_error(Error::NeedMoreData))?;
-        Ok(QcsImageDecoder { bytes, header, limits })
+        let header = d
+            .header()
+            .cloned()
+            .ok_or_else(|| to_image_error(Error::NeedMoreData))?;
+        Ok(QcsImageDecoder {
+            bytes,
+            header,
+            limits,
+        })
     }
 }
 
@@ -80,7 +92,10 @@ impl ImageDecoder for QcsImageDecoder {
     }
 
     fn read_image(self, buf: &mut [u8]) -> ImageResult<()> {
-        let opts = DecodeOptions { limits: self.limits.clone(), ..Default::default() };
+        let opts = DecodeOptions {
+            limits: self.limits.clone(),
+            ..Default::default()
+        };
         let d = decode(&self.bytes, &opts).map_err(to_image_error)?;
         buf.copy_from_slice(d.image.as_bytes());
         Ok(())

@@ -5,6 +5,8 @@
 //! `[i, i+1) × [j, j+1)`, so its centre is `(i + 0.5, j + 0.5)`, and every site
 //! of a `W × H` image lies in `[0, W) × [0, H)`.
 
+pub mod strategies;
+
 /// A site position in pixel coordinates (`x` right, `y` down).
 pub type Point = [f64; 2];
 

@@ -1,0 +1,166 @@
+//! PSNR-vs-samples plots with `plotters` (SVG with text, PNG without: no font is bundled).
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use crate::{Error, Result};
+
+/// Series colours, in sampler order (shared by the SVG legend and the PNG).
+pub(crate) const PALETTE: [RGBColor; 8] = [
+    RGBColor(214, 39, 40),
+    RGBColor(31, 119, 180),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+/// The series colour of sampler number `k`, as `#rrggbb` (for the HTML legend).
+pub(crate) fn colour_hex(k: usize) -> String {
+    let RGBColor(r, g, b) = PALETTE[k % PALETTE.len()];
+    format!("#{r:02x}{g:02x}{b:02x}")
+}
+
+fn err<E: std::fmt::Display>(e: E) -> Error {
+    Error::Io(std::io::Error::other(format!("plot: {e}")))
+}
+
+fn bounds(series: &[(String, Vec<(usize, f64)>)]) -> Option<(f64, f64, f64, f64)> {
+    let pts: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|(_, c)| c.iter().map(|&(n, p)| (n as f64, p)))
+        .filter(|p| p.0 > 0.0 && p.1.is_finite())
+        .collect();
+    if pts.is_empty() {
+        return None;
+    }
+    let x0 = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let x1 = pts
+        .iter()
+        .map(|p| p.0)
+        .fold(f64::NEG_INFINITY, f64::max)
+        .max(x0 * 1.01);
+    let y0 = pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let y1 = pts
+        .iter()
+        .map(|p| p.1)
+        .fold(f64::NEG_INFINITY, f64::max)
+        .max(y0 + 0.1);
+    let pad = (y1 - y0) * 0.05;
+    Some((x0, x1, y0 - pad, y1 + pad))
+}
+
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    title: Option<&str>,
+    series: &[(String, Vec<(usize, f64)>)],
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(err)?;
+    let Some((x0, x1, y0, y1)) = bounds(series) else {
+        return root.present().map_err(err);
+    };
+    let labels = title.is_some();
+    let mut builder = ChartBuilder::on(&root);
+    builder.margin(15);
+    if let Some(t) = title {
+        builder
+            .caption(t, ("sans-serif", 20))
+            .x_label_area_size(40)
+            .y_label_area_size(55);
+    }
+    let mut chart = builder
+        .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+        .map_err(err)?;
+    if labels {
+        chart
+            .configure_mesh()
+            .x_desc("samples")
+            .y_desc("PSNR (dB)")
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .draw()
+            .map_err(err)?;
+    } else {
+        chart
+            .configure_mesh()
+            .x_labels(0)
+            .y_labels(0)
+            .draw()
+            .map_err(err)?;
+    }
+    // Guides drawn as data, so the label-less PNG has them too: every whole dB
+    // (every 5 dB on tall ranges) and the square counts (2^k+1)².
+    let grey = RGBColor(215, 215, 215);
+    let step = if y1 - y0 > 20.0 { 5.0 } else { 1.0 };
+    let mut y = (y0 / step).ceil() * step;
+    while y <= y1 {
+        chart
+            .draw_series(LineSeries::new([(x0, y), (x1, y)], grey))
+            .map_err(err)?;
+        y += step;
+    }
+    for k in 0..16 {
+        let sq = (((1u64 << k) + 1) * ((1u64 << k) + 1)) as f64;
+        if sq >= x0 && sq <= x1 {
+            chart
+                .draw_series(LineSeries::new(
+                    [(sq, y0), (sq, y1)],
+                    RGBColor(180, 180, 230),
+                ))
+                .map_err(err)?;
+        }
+    }
+    for (k, (name, curve)) in series.iter().enumerate() {
+        let colour = PALETTE[k % PALETTE.len()];
+        let pts: Vec<(f64, f64)> = curve.iter().map(|&(n, p)| (n as f64, p)).collect();
+        let s = chart
+            .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
+            .map_err(err)?;
+        if labels {
+            s.label(name.as_str()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+        }
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 2, colour.filled())))
+            .map_err(err)?;
+    }
+    if labels {
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()
+            .map_err(err)?;
+    }
+    root.present().map_err(err)
+}
+
+/// Writes the curves as an SVG with title, axes labels and legend, and as a PNG
+/// with the same lines and colours but no text (the bitmap backend has no font
+/// without the `ttf`/`ab_glyph` features; `index.html` shows the SVG). Both
+/// show grey lines at whole dB and blue lines at the square counts.
+pub(crate) fn curves(
+    svg: &Path,
+    png: &Path,
+    title: &str,
+    series: &[(String, Vec<(usize, f64)>)],
+) -> Result<()> {
+    draw(
+        SVGBackend::new(svg, (900, 560)).into_drawing_area(),
+        Some(title),
+        series,
+    )?;
+    draw(
+        BitMapBackend::new(png, (900, 560)).into_drawing_area(),
+        None,
+        series,
+    )?;
+    Ok(())
+}
