@@ -231,8 +231,9 @@ impl StreamDecoder {
         &self.metadata
     }
 
-    /// Positions (source pixels) and colours of the first `k` available samples.
-    fn samples(&mut self, k: u64) -> (&[Point], &[u8]) {
+    /// Positions (source pixels) and colours (in the file's layout) of the first `k`
+    /// available samples, e.g. for the stylized renderers.
+    pub fn samples(&mut self, k: u64) -> (&[Point], &[u8]) {
         let k = k.min(self.sample_count()) as usize;
         if self.sites.len() < k {
             let seq = self.seq.expect("samples imply a header");

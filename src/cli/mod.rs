@@ -1,6 +1,7 @@
 //! Command-line definitions (clap) and dispatch; one module per subcommand.
 
 mod codec;
+mod render;
 mod sites;
 
 use clap::{Parser, Subcommand};
@@ -37,6 +38,14 @@ pub enum Command {
         after_help = "Examples:\n  qcs sites --width 512 --height 512 --count 1089\n  qcs sites --width 640 --height 480 --count 500 --sampler halton"
     )]
     Sites(sites::SitesArgs),
+    /// Render a .qcs file (or an image sampled by any strategy) in a stylized way.
+    #[command(
+        after_help = "Examples:\n  qcs render photo.qcs mosaic.png --style mosaic --samples 2000\n  qcs render --sampler halton --samples 4225 photo.png halton.png --style voronoi\n  qcs render photo.qcs spectrum.png --style spectrum"
+    )]
+    Render(render::RenderArgs),
+    /// Reproduce the paper's evaluation of six sampling strategies on images.
+    #[command(after_help = "Example:\n  qcs eval photos/*.png --out eval/")]
+    Eval(render::EvalArgs),
     /// Encode an image and write previews decoded from growing prefixes of its file.
     #[command(after_help = "Example:\n  qcs demo assets/rocket.png out/")]
     Demo(codec::DemoArgs),
@@ -69,6 +78,8 @@ pub fn main() -> ExitCode {
         Command::Info(a) => codec::info(a),
         Command::Sites(a) => sites::run(a),
         Command::Demo(a) => codec::demo(a, quiet),
+        Command::Render(a) => render::render(a, quiet),
+        Command::Eval(a) => render::eval(a, quiet),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,
@@ -100,6 +111,13 @@ pub fn sampler_by_name(
     if name == "quasicrystal" {
         return Some(Box::new(qcs::sites::Quasicrystal::new(1, 1).ok()?));
     }
-    let _ = seed;
-    None
+    use qcs::sites::strategies::*;
+    Some(match name {
+        "periodic" => Box::new(Periodic),
+        "jittered" => Box::new(Jittered { seed }),
+        "halton" => Box::new(Halton),
+        "random" => Box::new(Random { seed }),
+        "farthest" => Box::new(FarthestPoint { seed }),
+        _ => return None,
+    })
 }

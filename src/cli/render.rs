@@ -1,0 +1,190 @@
+//! `qcs render` (stylized renderings) and `qcs eval` (the paper's evaluation).
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use qcs::sampling::{SampleColour, SourceImage};
+use qcs::sites::Point;
+use qcs::{styles, Method, StreamDecoder};
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum Style {
+    Mosaic,
+    Strokes,
+    Voronoi,
+    Delaunay,
+    Sites,
+    Spectrum,
+    Phase,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// A .qcs file, or an ordinary image to sample with --sampler.
+    pub input: PathBuf,
+    /// The output PNG.
+    pub output: PathBuf,
+    /// The rendering style.
+    #[arg(long, value_enum, default_value = "mosaic")]
+    pub style: Style,
+    /// Number of samples (default: all of a .qcs file; 4225 for an image).
+    #[arg(long)]
+    pub samples: Option<usize>,
+    /// Output size WxH (default: the image's size).
+    #[arg(long, value_parser = super::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Sampler for an ordinary image: quasicrystal, periodic, jittered, halton, random, farthest.
+    #[arg(long, default_value = "quasicrystal")]
+    pub sampler: String,
+    /// Seed of the random samplers.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// Positions and RGB colours of the samples, and the source size.
+fn samples(a: &RenderArgs) -> Result<(Vec<Point>, Vec<u8>, (u32, u32))> {
+    let bytes =
+        std::fs::read(&a.input).with_context(|| format!("cannot read {}", a.input.display()))?;
+    if bytes.starts_with(&qcs::container::MAGIC) {
+        let mut d = StreamDecoder::new(qcs::Limits::default());
+        d.push(&bytes)
+            .with_context(|| format!("cannot decode {}", a.input.display()))?;
+        let h = d.header().cloned().ok_or(qcs::Error::NeedMoreData)?;
+        let c = h.layout.channels() as usize;
+        let k = a.samples.map_or(u64::MAX, |n| n as u64);
+        let (pos, col) = d.samples(k);
+        let rgb = col
+            .chunks_exact(c)
+            .flat_map(|p| {
+                if c >= 3 {
+                    [p[0], p[1], p[2]]
+                } else {
+                    [p[0]; 3]
+                }
+            })
+            .collect();
+        return Ok((pos.to_vec(), rgb, (h.width, h.height)));
+    }
+    let img = image::load_from_memory(&bytes)
+        .with_context(|| format!("cannot read image {}", a.input.display()))?
+        .to_rgb8();
+    let (w, h) = img.dimensions();
+    let n = a.samples.unwrap_or(4225);
+    let Some(sampler) = super::sampler_by_name(&a.sampler, a.seed) else {
+        bail!("unknown sampler {:?}", a.sampler);
+    };
+    let pos = sampler.sites(w, h, n);
+    let col = SourceImage::new(img.as_raw(), w, h, 3).colours(&pos, SampleColour::Area, n);
+    Ok((pos, col, (w, h)))
+}
+
+pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
+    let out = a.output.clone();
+    let save_err = || format!("cannot write {}", out.display());
+    if a.style == Style::Phase {
+        let size = a.size.unwrap_or((512, 512));
+        let window = styles::PhaseWindow::centred(1.5);
+        let contour = styles::phase_contour(window, size)?;
+        let level = styles::phase_level_set(window, size, 2.0)?;
+        let mut both = image::RgbImage::new(size.0 * 2, size.1);
+        image::imageops::replace(&mut both, &contour, 0, 0);
+        image::imageops::replace(&mut both, &level, size.0 as i64, 0);
+        both.save(&a.output).with_context(save_err)?;
+        return Ok(());
+    }
+    let (pos, col, source) = samples(&a)?;
+    let size = a.size.unwrap_or(source);
+    let img = match a.style {
+        Style::Mosaic => styles::mosaic(&pos, &col, source, size)?,
+        Style::Strokes => styles::strokes(&pos, &col, source, size)?,
+        Style::Voronoi => styles::voronoi(&pos, &col, source, size)?,
+        Style::Delaunay => {
+            let bg =
+                qcs::reconstruction::render(source, 3, &pos, &col, Method::Gouraud, size.0, size.1);
+            let bg = image::RgbImage::from_raw(size.0, size.1, bg).expect("render size");
+            styles::delaunay_over(&pos, source, &bg)?
+        }
+        Style::Sites => styles::order(&pos, source, size)?,
+        Style::Spectrum => {
+            let n = size.0.max(size.1).clamp(16, 2048) as usize;
+            image::DynamicImage::ImageLuma8(styles::spectrum(&pos, source, n)?).to_rgb8()
+        }
+        Style::Phase => unreachable!("handled above"),
+    };
+    img.save(&a.output).with_context(save_err)?;
+    if !quiet {
+        eprintln!(
+            "{}: {:?} of {} samples",
+            a.output.display(),
+            a.style,
+            pos.len()
+        );
+    }
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+pub struct EvalArgs {
+    /// Images to evaluate on.
+    #[arg(required = true)]
+    pub images: Vec<PathBuf>,
+    /// Output directory (CSV, plots, panels, index.html).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Fewer curve points and smaller panels, for a quick look.
+    #[arg(long)]
+    pub quick: bool,
+    /// Seed of the random samplers.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+pub fn eval(a: EvalArgs, quiet: bool) -> Result<()> {
+    let mut images = Vec::new();
+    for p in &a.images {
+        let img = image::open(p)
+            .with_context(|| format!("cannot read image {}", p.display()))?
+            .to_rgb8();
+        let name = p
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("image")
+            .to_string();
+        images.push((name, img));
+    }
+    let mut samplers: Vec<Box<dyn qcs::sites::Sampler + Send + Sync>> =
+        vec![super::sampler_by_name("quasicrystal", a.seed).expect("quasicrystal")];
+    samplers.extend(qcs::sites::strategies::all(a.seed));
+    let mut opts = qcs::eval::EvalOptions::default();
+    if a.quick {
+        opts.curve_counts = qcs::eval::curve_counts(256, 8192, 12);
+        opts.panel_size = 256;
+    }
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}").expect("valid template"),
+    );
+    let report = qcs::eval::run(&images, &samplers, &a.out, &opts, &mut |p| {
+        bar.set_length(p.total as u64);
+        bar.set_position(p.done as u64);
+        bar.set_message(p.stage.to_string());
+    })?;
+    bar.finish_and_clear();
+    if !quiet {
+        for c in &report.claims {
+            let v = match c.holds {
+                Some(true) => "holds",
+                Some(false) => "does not hold",
+                None => "not checked",
+            };
+            println!("{v:>14}: {} ({})", c.statement, c.evidence);
+        }
+        println!("report: {}", a.out.join("index.html").display());
+    }
+    Ok(())
+}
