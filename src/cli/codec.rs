@@ -513,3 +513,135 @@ fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
         10.0 * (255.0f64 * 255.0 / mse).log10()
     }
 }
+
+#[derive(Args, Debug)]
+pub struct PreviewArgs {
+    /// The .qcs file.
+    pub input: PathBuf,
+    /// The animated GIF to write.
+    pub output: PathBuf,
+    /// Bytes between frames (default: one frame per level).
+    #[arg(long)]
+    pub every: Option<usize>,
+    /// Frame size WxH (default: the image's size, at most 512 px wide).
+    #[arg(long, value_parser = super::parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Delay per frame in milliseconds.
+    #[arg(long, default_value_t = 400)]
+    pub delay_ms: u32,
+}
+
+/// 3×5 pixel digits, one row per entry, bit 2 = left column.
+const DIGITS: [[u8; 5]; 11] = [
+    [7, 5, 5, 5, 7],
+    [2, 6, 2, 2, 7],
+    [7, 1, 7, 4, 7],
+    [7, 1, 3, 1, 7],
+    [5, 5, 7, 1, 1],
+    [7, 4, 7, 1, 7],
+    [7, 4, 7, 5, 7],
+    [7, 1, 1, 1, 1],
+    [7, 5, 7, 5, 7],
+    [7, 5, 7, 1, 7],
+    [6, 5, 6, 5, 6], // B
+];
+
+/// Draws `text` (digits and 'B') at the bottom left, white on black, 2 px per font pixel.
+fn stamp(img: &mut image::RgbaImage, text: &str) {
+    let scale = 2u32;
+    let glyphs: Vec<usize> = text
+        .chars()
+        .filter_map(|c| {
+            if c == 'B' {
+                Some(10)
+            } else {
+                c.to_digit(10).map(|d| d as usize)
+            }
+        })
+        .collect();
+    let (w, h) = img.dimensions();
+    let box_w = (glyphs.len() as u32 * 4 + 1) * scale;
+    let box_h = 7 * scale;
+    if box_w > w || box_h > h {
+        return;
+    }
+    for y in h - box_h..h {
+        for x in 0..box_w {
+            img.put_pixel(x, y, image::Rgba([0, 0, 0, 255]));
+        }
+    }
+    for (i, &g) in glyphs.iter().enumerate() {
+        for (row, bits) in DIGITS[g].iter().enumerate() {
+            for col in 0..3u32 {
+                if bits & (4 >> col) != 0 {
+                    for dy in 0..scale {
+                        for dx in 0..scale {
+                            let x = (1 + i as u32 * 4 + col) * scale + dx;
+                            let y = h - box_h + (1 + row as u32) * scale + dy;
+                            img.put_pixel(x, y, image::Rgba([255, 255, 255, 255]));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
+    use image::codecs::gif::{GifEncoder, Repeat};
+    use image::{Delay, Frame};
+    let bytes = read(&a.input)?;
+    let ctx = || format!("cannot decode {}", a.input.display());
+    let mut cuts: Vec<usize> = match a.every {
+        Some(0) => bail!("--every must be positive"),
+        Some(k) => (1..)
+            .map(|i| i * k)
+            .take_while(|&c| c < bytes.len())
+            .collect(),
+        None => level_ends(&bytes),
+    };
+    cuts.push(bytes.len());
+    cuts.dedup();
+    let file = std::fs::File::create(&a.output)
+        .with_context(|| format!("cannot create {}", a.output.display()))?;
+    let mut gif = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+    gif.set_repeat(Repeat::Infinite)?;
+    let mut dec = StreamDecoder::new(qcs::Limits::default());
+    let mut fed = 0;
+    let mut frames = 0;
+    for cut in cuts {
+        dec.push(&bytes[fed..cut]).with_context(ctx)?;
+        fed = cut;
+        let Some(h) = dec.header().cloned() else {
+            continue;
+        };
+        let size = a.size.unwrap_or_else(|| {
+            let f = (512.0 / h.width as f64).min(1.0);
+            (
+                ((h.width as f64 * f).round() as u32).max(1),
+                ((h.height as f64 * f).round() as u32).max(1),
+            )
+        });
+        let pic = dec
+            .render(Method::Gouraud, size.0, size.1)
+            .with_context(ctx)?;
+        let mut rgba = pic.decoded().image.to_rgba8();
+        stamp(&mut rgba, &format!("{cut}B"));
+        let delay = if pic.is_final() {
+            a.delay_ms * 4
+        } else {
+            a.delay_ms
+        };
+        gif.encode_frame(Frame::from_parts(
+            rgba,
+            0,
+            0,
+            Delay::from_numer_denom_ms(delay, 1),
+        ))?;
+        frames += 1;
+    }
+    if !quiet {
+        eprintln!("{}: {frames} frames", a.output.display());
+    }
+    Ok(())
+}

@@ -38,6 +38,11 @@ pub enum Command {
         after_help = "Examples:\n  qcs sites --width 512 --height 512 --count 1089\n  qcs sites --width 640 --height 480 --count 500 --sampler halton"
     )]
     Sites(sites::SitesArgs),
+    /// Write an animated GIF of a .qcs file sharpening as its bytes arrive (byte count in each frame).
+    #[command(
+        after_help = "Examples:\n  qcs preview photo.qcs photo.gif\n  qcs preview photo.qcs photo.gif --every 2048 --size 240x160"
+    )]
+    Preview(codec::PreviewArgs),
     /// Render a .qcs file (or an image sampled by any strategy) in a stylized way.
     #[command(
         after_help = "Examples:\n  qcs render photo.qcs mosaic.png --style mosaic --samples 2000\n  qcs render --sampler halton --samples 4225 photo.png halton.png --style voronoi\n  qcs render photo.qcs spectrum.png --style spectrum"
@@ -78,6 +83,7 @@ pub fn main() -> ExitCode {
         Command::Info(a) => codec::info(a),
         Command::Sites(a) => sites::run(a),
         Command::Demo(a) => codec::demo(a, quiet),
+        Command::Preview(a) => codec::preview(a, quiet),
         Command::Render(a) => render::render(a, quiet),
         Command::Eval(a) => render::eval(a, quiet),
     };
