@@ -1,0 +1,151 @@
+//! Encoder + decoder end to end: round trips on photographs, prefixes, streaming equality.
+
+use qcs::{decode, encode, DecodeOptions, EncodeOptions, Error, Method, StreamDecoder};
+
+fn photo(name: &str) -> image::DynamicImage {
+    image::open(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).expect("test image")
+}
+
+fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
+    qcs::eval::psnr(a, b).unwrap()
+}
+
+#[test]
+fn round_trip_psnr_on_photographs() {
+    // One sample per 4 pixels, raw 8-bit: the full decode must be a faithful picture.
+    for (name, floor) in [("coffee-150x100.png", 22.0), ("astronaut-128x128.png", 19.0), ("seashore-100x100.png", 22.5)] {
+        let img = photo(name);
+        let bytes = encode(&img, &EncodeOptions { density: 0.25, ..Default::default() }).unwrap();
+        let d = decode(&bytes, &DecodeOptions::default()).unwrap();
+        assert!(d.is_final);
+        assert_eq!(d.samples_used, d.samples_verified);
+        let p = psnr(&img.to_rgb8(), &d.image.to_rgb8());
+        eprintln!("{name}: full {p:.2} dB");
+        assert!(p > floor, "{name}: {p:.2} dB");
+        // Fewer samples, lower but still sensible PSNR; more bytes never hurt much.
+        let half = decode(&bytes, &DecodeOptions { max_bytes: Some(bytes.len() / 4), ..Default::default() }).unwrap();
+        let ph = psnr(&img.to_rgb8(), &half.image.to_rgb8());
+        assert!(ph < p && ph > floor - 6.0, "{name}: quarter file {ph:.2} dB vs {p:.2}");
+    }
+}
+
+#[test]
+fn every_prefix_decodes() {
+    let img = photo("seashore-100x100.png");
+    let img = image::DynamicImage::ImageRgb8(image::imageops::thumbnail(&img.to_rgb8(), 24, 24));
+    let bytes = encode(&img, &EncodeOptions { samples: Some(120), ..Default::default() }).unwrap();
+    let header_len = qcs::container::Header::parse(&bytes).unwrap().1;
+    let mut last = 0;
+    for cut in 0..=bytes.len() {
+        let r = decode(&bytes, &DecodeOptions { max_bytes: Some(cut), size: Some((13, 7)), ..Default::default() });
+        if cut < header_len {
+            assert!(matches!(r, Err(Error::NeedMoreData)), "cut {cut}");
+            continue;
+        }
+        let d = r.unwrap_or_else(|e| panic!("cut {cut}: {e}"));
+        assert_eq!((d.image.width(), d.image.height()), (13, 7));
+        assert!(d.samples_used >= last, "samples never decrease");
+        assert!(d.samples_verified <= d.samples_used);
+        assert_eq!(d.is_final, cut == bytes.len());
+        last = d.samples_used;
+    }
+    assert_eq!(last, 120);
+}
+
+#[test]
+fn layouts_round_trip() {
+    let rgb = photo("coffee-150x100.png");
+    for img in [
+        image::DynamicImage::ImageLuma8(rgb.to_luma8()),
+        image::DynamicImage::ImageLumaA8(rgb.to_luma_alpha8()),
+        rgb.clone(),
+        image::DynamicImage::ImageRgba8(rgb.to_rgba8()),
+    ] {
+        let bytes = encode(&img, &EncodeOptions::default()).unwrap();
+        let d = decode(&bytes, &DecodeOptions { size: Some((75, 50)), ..Default::default() }).unwrap();
+        assert_eq!(d.image.color(), img.color());
+        assert_eq!((d.image.width(), d.image.height()), (75, 50));
+    }
+}
+
+#[test]
+fn low_bit_depths_cost_fewer_bytes() {
+    let img = photo("coffee-150x100.png");
+    let mut sizes = Vec::new();
+    for bits in [1u8, 4, 8] {
+        let opts = EncodeOptions { coding: qcs::container::Coding::Raw { bits }, ..Default::default() };
+        let bytes = encode(&img, &opts).unwrap();
+        sizes.push(bytes.len());
+        let d = decode(&bytes, &DecodeOptions::default()).unwrap();
+        assert!(d.is_final);
+    }
+    assert!(sizes[0] < sizes[1] && sizes[1] < sizes[2], "{sizes:?}");
+}
+
+/// A reproducible xorshift for chunk sizes.
+fn chunks(seed: u64, len: usize) -> Vec<usize> {
+    let mut s = seed | 1;
+    let mut cuts = Vec::new();
+    let mut at = 0;
+    while at < len {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        let step = match s % 4 {
+            0 => 1,
+            1 => (s >> 8) as usize % 16,
+            _ => (s >> 8) as usize % 700,
+        };
+        at = (at + step).min(len);
+        cuts.push(at);
+    }
+    cuts
+}
+
+#[test]
+fn streaming_renders_equal_one_shot_decodes_of_the_same_prefix() {
+    for name in ["coffee-150x100.png", "seashore-100x100.png"] {
+        let img = photo(name);
+        let bytes = encode(&img, &EncodeOptions { density: 0.2, ..Default::default() }).unwrap();
+        for seed in 1..4u64 {
+            let mut dec = StreamDecoder::new(qcs::Limits::default());
+            let mut fed = 0;
+            for (i, cut) in chunks(seed, bytes.len()).into_iter().enumerate() {
+                dec.push(&bytes[fed..cut]).unwrap();
+                fed = cut;
+                if i % 5 != 0 && cut != bytes.len() {
+                    continue;
+                }
+                if dec.header().is_none() {
+                    continue;
+                }
+                for method in [Method::Gouraud, Method::Shepard] {
+                    let pic = dec.render(method, 61, 47).unwrap();
+                    let one = decode(
+                        &bytes,
+                        &DecodeOptions { method, max_bytes: Some(cut), size: Some((61, 47)), ..Default::default() },
+                    )
+                    .unwrap();
+                    assert_eq!(pic.decoded().samples_used, one.samples_used);
+                    assert_eq!(pic.is_final(), one.is_final);
+                    assert!(
+                        pic.decoded().image.as_bytes() == one.image.as_bytes(),
+                        "{name} seed {seed} cut {cut} {method:?}: streaming and one-shot pictures differ"
+                    );
+                }
+            }
+            assert!(dec.is_complete());
+        }
+    }
+}
+
+/// The README's photo at the default settings (1 sample per 8 pixels, raw 8-bit):
+/// the floor stated in the README.
+#[test]
+fn bundled_photo_meets_the_stated_floor() {
+    let img = image::open(format!("{}/assets/rocket.png", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let bytes = encode(&img, &EncodeOptions::default()).unwrap();
+    let d = decode(&bytes, &DecodeOptions::default()).unwrap();
+    let p = psnr(&img.to_rgb8(), &d.image.to_rgb8());
+    assert!(p > 26.5, "rocket: {p:.2} dB");
+}
