@@ -13,9 +13,20 @@ fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
 #[test]
 fn round_trip_psnr_on_photographs() {
     // One sample per 4 pixels, raw 8-bit: the full decode must be a faithful picture.
-    for (name, floor) in [("coffee-150x100.png", 22.0), ("astronaut-128x128.png", 19.0), ("seashore-100x100.png", 22.5)] {
+    for (name, floor) in [
+        ("coffee-150x100.png", 22.0),
+        ("astronaut-128x128.png", 19.0),
+        ("seashore-100x100.png", 22.5),
+    ] {
         let img = photo(name);
-        let bytes = encode(&img, &EncodeOptions { density: 0.25, ..Default::default() }).unwrap();
+        let bytes = encode(
+            &img,
+            &EncodeOptions {
+                density: 0.25,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         let d = decode(&bytes, &DecodeOptions::default()).unwrap();
         assert!(d.is_final);
         assert_eq!(d.samples_used, d.samples_verified);
@@ -23,9 +34,19 @@ fn round_trip_psnr_on_photographs() {
         eprintln!("{name}: full {p:.2} dB");
         assert!(p > floor, "{name}: {p:.2} dB");
         // Fewer samples, lower but still sensible PSNR; more bytes never hurt much.
-        let half = decode(&bytes, &DecodeOptions { max_bytes: Some(bytes.len() / 4), ..Default::default() }).unwrap();
+        let half = decode(
+            &bytes,
+            &DecodeOptions {
+                max_bytes: Some(bytes.len() / 4),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         let ph = psnr(&img.to_rgb8(), &half.image.to_rgb8());
-        assert!(ph < p && ph > floor - 6.0, "{name}: quarter file {ph:.2} dB vs {p:.2}");
+        assert!(
+            ph < p && ph > floor - 6.0,
+            "{name}: quarter file {ph:.2} dB vs {p:.2}"
+        );
     }
 }
 
@@ -33,11 +54,25 @@ fn round_trip_psnr_on_photographs() {
 fn every_prefix_decodes() {
     let img = photo("seashore-100x100.png");
     let img = image::DynamicImage::ImageRgb8(image::imageops::thumbnail(&img.to_rgb8(), 24, 24));
-    let bytes = encode(&img, &EncodeOptions { samples: Some(120), ..Default::default() }).unwrap();
+    let bytes = encode(
+        &img,
+        &EncodeOptions {
+            samples: Some(120),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let header_len = qcs::container::Header::parse(&bytes).unwrap().1;
     let mut last = 0;
     for cut in 0..=bytes.len() {
-        let r = decode(&bytes, &DecodeOptions { max_bytes: Some(cut), size: Some((13, 7)), ..Default::default() });
+        let r = decode(
+            &bytes,
+            &DecodeOptions {
+                max_bytes: Some(cut),
+                size: Some((13, 7)),
+                ..Default::default()
+            },
+        );
         if cut < header_len {
             assert!(matches!(r, Err(Error::NeedMoreData)), "cut {cut}");
             continue;
@@ -62,7 +97,14 @@ fn layouts_round_trip() {
         image::DynamicImage::ImageRgba8(rgb.to_rgba8()),
     ] {
         let bytes = encode(&img, &EncodeOptions::default()).unwrap();
-        let d = decode(&bytes, &DecodeOptions { size: Some((75, 50)), ..Default::default() }).unwrap();
+        let d = decode(
+            &bytes,
+            &DecodeOptions {
+                size: Some((75, 50)),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert_eq!(d.image.color(), img.color());
         assert_eq!((d.image.width(), d.image.height()), (75, 50));
     }
@@ -73,7 +115,10 @@ fn low_bit_depths_cost_fewer_bytes() {
     let img = photo("coffee-150x100.png");
     let mut sizes = Vec::new();
     for bits in [1u8, 4, 8] {
-        let opts = EncodeOptions { coding: qcs::container::Coding::Raw { bits }, ..Default::default() };
+        let opts = EncodeOptions {
+            coding: qcs::container::Coding::Raw { bits },
+            ..Default::default()
+        };
         let bytes = encode(&img, &opts).unwrap();
         sizes.push(bytes.len());
         let d = decode(&bytes, &DecodeOptions::default()).unwrap();
@@ -106,7 +151,14 @@ fn chunks(seed: u64, len: usize) -> Vec<usize> {
 fn streaming_renders_equal_one_shot_decodes_of_the_same_prefix() {
     for name in ["coffee-150x100.png", "seashore-100x100.png"] {
         let img = photo(name);
-        let bytes = encode(&img, &EncodeOptions { density: 0.2, ..Default::default() }).unwrap();
+        let bytes = encode(
+            &img,
+            &EncodeOptions {
+                density: 0.2,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         for seed in 1..4u64 {
             let mut dec = StreamDecoder::new(qcs::Limits::default());
             let mut fed = 0;
@@ -123,7 +175,12 @@ fn streaming_renders_equal_one_shot_decodes_of_the_same_prefix() {
                     let pic = dec.render(method, 61, 47).unwrap();
                     let one = decode(
                         &bytes,
-                        &DecodeOptions { method, max_bytes: Some(cut), size: Some((61, 47)), ..Default::default() },
+                        &DecodeOptions {
+                            method,
+                            max_bytes: Some(cut),
+                            size: Some((61, 47)),
+                            ..Default::default()
+                        },
                     )
                     .unwrap();
                     assert_eq!(pic.decoded().samples_used, one.samples_used);
