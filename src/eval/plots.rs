@@ -157,10 +157,16 @@ pub(crate) fn curves(
         Some(title),
         series,
     )?;
+    // Draw into a buffer and save with `image` 0.25 (plotters' own encoder would pull image 0.24).
+    let mut buf = vec![255u8; 900 * 560 * 3];
     draw(
-        BitMapBackend::new(png, (900, 560)).into_drawing_area(),
+        BitMapBackend::with_buffer(&mut buf, (900, 560)).into_drawing_area(),
         None,
         series,
     )?;
+    image::RgbImage::from_raw(900, 560, buf)
+        .ok_or_else(|| crate::Error::Parameter("plot buffer size".into()))?
+        .save(png)
+        .map_err(|e| crate::Error::Io(std::io::Error::other(e)))?;
     Ok(())
 }
