@@ -1,0 +1,66 @@
+//! The measurement tables of the README: what a sample's colour should be, and the PSNR of
+//! each reconstruction at the paper's sample counts, as means over a folder of photographs.
+//!
+//! ```text
+//! cargo run --release --example tables -- ../shared/corpus/dev
+//! ```
+
+use qcs::reconstruction::{render, Method};
+use qcs::sampling::{SampleColour, SourceImage};
+use qcs::sites::Quasicrystal;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let dir = std::env::args().nth(1).unwrap_or_else(|| "../shared/corpus/dev".into());
+    let mut paths: Vec<_> = std::fs::read_dir(&dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+        .collect();
+    paths.sort();
+    let rules = [
+        ("nearest", SampleColour::Nearest),
+        ("bilinear", SampleColour::Bilinear),
+        ("area", SampleColour::Area),
+        ("progressive", SampleColour::Progressive),
+    ];
+    let shares = [0.01, 0.05, 0.25, 1.0];
+    let counts = [1089usize, 4225, 16641];
+    let methods = [Method::Gouraud, Method::Shepard, Method::Natural];
+    let mut colour_table = vec![[0.0f64; 4]; rules.len()];
+    let mut recon_table = vec![[0.0f64; 3]; methods.len()];
+    for path in &paths {
+        let img = image::open(path)?.to_rgb8();
+        let (w, h) = img.dimensions();
+        let n = (w as usize * h as usize) / 8;
+        let sites: Vec<_> = Quasicrystal::new(w, h)?.first(n).into_iter().map(|s| s.pos).collect();
+        let src = SourceImage::new(img.as_raw(), w, h, 3);
+        for (r, (_, rule)) in rules.iter().enumerate() {
+            let colours = src.colours(&sites, *rule, n);
+            for (s, share) in shares.iter().enumerate() {
+                let k = ((n as f64 * share) as usize).max(3);
+                let px = render((w, h), 3, &sites[..k], &colours[..k * 3], Method::Gouraud, w, h);
+                colour_table[r][s] += qcs::eval::psnr_bytes(img.as_raw(), &px)? / paths.len() as f64;
+            }
+        }
+        for (c, &k) in counts.iter().enumerate() {
+            let colours = src.colours(&sites[..k], SampleColour::Area, k);
+            for (m, method) in methods.iter().enumerate() {
+                let px = render((w, h), 3, &sites[..k], &colours, *method, w, h);
+                recon_table[m][c] += qcs::eval::psnr_bytes(img.as_raw(), &px)? / paths.len() as f64;
+            }
+        }
+        eprintln!("{}", path.display());
+    }
+    println!("Sample colour (raw 8-bit, N = W·H/8, Gouraud), mean PSNR over {} photos, at a share of the N samples:\n", paths.len());
+    println!("| sample colour | 1% | 5% | 25% | 100% |\n|---|---|---|---|---|");
+    for (r, (name, _)) in rules.iter().enumerate() {
+        let v = colour_table[r];
+        println!("| {name} | {:.2} | {:.2} | {:.2} | {:.2} |", v[0], v[1], v[2], v[3]);
+    }
+    println!("\nReconstruction (quasicrystal sites, area-mean colours), mean PSNR:\n");
+    println!("| method | 1089 | 4225 | 16641 |\n|---|---|---|---|");
+    for (m, method) in methods.iter().enumerate() {
+        let v = recon_table[m];
+        println!("| {method:?} | {:.2} | {:.2} | {:.2} |", v[0], v[1], v[2]);
+    }
+    Ok(())
+}
