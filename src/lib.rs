@@ -35,3 +35,8 @@ pub use integration::{register_image_hooks, QcsImageDecoder};
 pub use limits::Limits;
 pub use pull::{Cadence, Previews};
 pub use reconstruction::Method;
+
+/// The README's code examples, run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
