@@ -10,7 +10,9 @@ use qcs::sampling::{SampleColour, SourceImage};
 use qcs::sites::Quasicrystal;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let dir = std::env::args().nth(1).unwrap_or_else(|| "../shared/corpus/dev".into());
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "../shared/corpus/dev".into());
     let mut paths: Vec<_> = std::fs::read_dir(&dir)?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|e| e == "png"))
@@ -31,14 +33,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let img = image::open(path)?.to_rgb8();
         let (w, h) = img.dimensions();
         let n = (w as usize * h as usize) / 8;
-        let sites: Vec<_> = Quasicrystal::new(w, h)?.first(n).into_iter().map(|s| s.pos).collect();
+        let sites: Vec<_> = Quasicrystal::new(w, h)?
+            .first(n)
+            .into_iter()
+            .map(|s| s.pos)
+            .collect();
         let src = SourceImage::new(img.as_raw(), w, h, 3);
         for (r, (_, rule)) in rules.iter().enumerate() {
             let colours = src.colours(&sites, *rule, n);
             for (s, share) in shares.iter().enumerate() {
                 let k = ((n as f64 * share) as usize).max(3);
-                let px = render((w, h), 3, &sites[..k], &colours[..k * 3], Method::Gouraud, w, h);
-                colour_table[r][s] += qcs::eval::psnr_bytes(img.as_raw(), &px)? / paths.len() as f64;
+                let px = render(
+                    (w, h),
+                    3,
+                    &sites[..k],
+                    &colours[..k * 3],
+                    Method::Gouraud,
+                    w,
+                    h,
+                );
+                colour_table[r][s] +=
+                    qcs::eval::psnr_bytes(img.as_raw(), &px)? / paths.len() as f64;
             }
         }
         for (c, &k) in counts.iter().enumerate() {
@@ -54,7 +69,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| sample colour | 1% | 5% | 25% | 100% |\n|---|---|---|---|---|");
     for (r, (name, _)) in rules.iter().enumerate() {
         let v = colour_table[r];
-        println!("| {name} | {:.2} | {:.2} | {:.2} | {:.2} |", v[0], v[1], v[2], v[3]);
+        println!(
+            "| {name} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            v[0], v[1], v[2], v[3]
+        );
     }
     println!("\nReconstruction (quasicrystal sites, area-mean colours), mean PSNR:\n");
     println!("| method | 1089 | 4225 | 16641 |\n|---|---|---|---|");

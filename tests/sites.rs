@@ -236,3 +236,59 @@ fn committed_site_vectors() {
         assert_eq!(text, want, "{path}");
     }
 }
+
+/// The integer bounds of spec/sites.md §4 hold at the extremes the frame allows
+/// (tests run with overflow checks on).
+#[test]
+fn integer_bounds_hold_at_the_extremes() {
+    let frames = [
+        (65535u32, 65535u32, Frame::default_for(65535, 65535)),
+        (
+            65535,
+            1,
+            Frame {
+                root_len: 1 << 16,
+                origin: [i32::MIN, i32::MAX],
+            },
+        ),
+        (
+            1,
+            65535,
+            Frame {
+                root_len: 1 << 16,
+                origin: [i32::MAX, i32::MIN],
+            },
+        ),
+        (
+            300,
+            200,
+            Frame {
+                root_len: 1 << 24,
+                origin: [0, 0],
+            },
+        ),
+    ];
+    for (w, h, f) in frames {
+        let q = Quasicrystal::with_frame(w, h, f).unwrap();
+        for s in q.first(2000) {
+            let n = s.lattice.0;
+            assert!(n.iter().all(|v| v.abs() < 1 << 20), "{n:?}");
+            let r2 = s.lattice.star().norm2();
+            assert!(r2.a.abs() < 1 << 37 && r2.b.abs() < 1 << 37, "{r2:?}");
+            assert!(
+                s.pos[0] >= 0.0 && s.pos[0] < w as f64 && s.pos[1] >= 0.0 && s.pos[1] < h as f64
+            );
+        }
+    }
+    // Sizes and root lengths outside the bounds are refused.
+    assert!(Quasicrystal::new(0, 5).is_err() && Quasicrystal::new(65536, 5).is_err());
+    assert!(Quasicrystal::with_frame(
+        9,
+        9,
+        Frame {
+            root_len: (1 << 16) - 1,
+            origin: [0, 0]
+        }
+    )
+    .is_err());
+}
