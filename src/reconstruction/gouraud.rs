@@ -135,7 +135,23 @@ pub(crate) fn render(
     };
     let setups = raster::setups(&tris);
     drop(tris);
-    let boundary = Boundary::new(mesh, frame.colours, c);
+    let boundary = match cells {
+        // The exact hull: sites that are exactly on a hull edge are boundary vertices.
+        Some(cells) => {
+            let at = |i: u32| positions.get(i as usize).copied().unwrap_or_default();
+            let edges = cells.hull().iter().map(|&[a, b]| {
+                let (pa, pb) = (at(a), at(b));
+                // Canonical direction, as for spade's hull.
+                if (pa[0], pa[1]) <= (pb[0], pb[1]) {
+                    (pa, pb, a as usize, b as usize)
+                } else {
+                    (pb, pa, b as usize, a as usize)
+                }
+            });
+            Boundary::from_edges(edges, frame.colours, c)
+        }
+        None => Boundary::new(mesh, frame.colours, c),
+    };
     if !parallel {
         let mut painted = vec![false; w * h];
         let mut band = Band {
