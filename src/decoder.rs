@@ -5,7 +5,7 @@ use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
 };
 use crate::reconstruction::{Method, SampleSet};
-use crate::sites::{Frame, Point, Quasicrystal};
+use crate::sites::{Frame, Quasicrystal, Site};
 use crate::{Error, Limits, Result};
 use image::DynamicImage;
 
@@ -74,7 +74,8 @@ pub struct StreamDecoder {
     limits: Limits,
     header: Option<Header>,
     seq: Option<Quasicrystal>,
-    sites: Vec<Point>,
+    /// Sites with their exact lattice points (Gouraud draws the canonical Delaunay cells).
+    sites: Vec<Site>,
     /// Decoded colours of the available samples, `channels` bytes each.
     colours: Vec<u8>,
     verified: u64,
@@ -231,16 +232,16 @@ impl StreamDecoder {
         &self.metadata
     }
 
-    /// Positions (source pixels) and colours (in the file's layout) of the first `k`
-    /// available samples, e.g. for the stylized renderers.
-    pub fn samples(&mut self, k: u64) -> (&[Point], &[u8]) {
+    /// Sites (exact lattice point and pixel position) and colours (in the file's layout) of
+    /// the first `k` available samples, e.g. for the stylized renderers.
+    pub fn samples(&mut self, k: u64) -> (&[Site], &[u8]) {
         let k = k.min(self.sample_count()) as usize;
         if self.sites.len() < k {
             let seq = self.seq.expect("samples imply a header");
             let total = self.header.as_ref().map_or(0, |h| h.total_samples) as usize;
             // Grow geometrically: total work stays O(n log n) however the bytes arrive.
             let target = k.max(2 * self.sites.len()).min(total).max(k);
-            self.sites = seq.first(target).into_iter().map(|s| s.pos).collect();
+            self.sites = seq.first(target);
         }
         let c = self.channels();
         (&self.sites[..k], &self.colours[..k * c])
@@ -264,9 +265,9 @@ impl StreamDecoder {
             .take()
             .unwrap_or_else(|| SampleSet::new(h.width, h.height, c));
         let have = set.len();
-        let (pos, col) = self.samples(n);
+        let (sites, col) = self.samples(n);
         for k in have..n as usize {
-            set.push(pos[k], &col[k * c..k * c + c]);
+            set.push_exact(sites[k].pos, sites[k].lattice, &col[k * c..k * c + c]);
         }
         let pixels = set.render(method, width, height);
         self.set = Some(set);
@@ -300,10 +301,13 @@ impl StreamDecoder {
             )));
         }
         let c = self.channels();
-        let (pos, col) = self.samples(k);
-        let used = pos.len() as u64;
-        let pixels =
-            crate::reconstruction::render((h.width, h.height), c, pos, col, method, width, height);
+        let (sites, col) = self.samples(k);
+        let used = sites.len() as u64;
+        let mut set = SampleSet::new(h.width, h.height, c);
+        for (k, s) in sites.iter().enumerate() {
+            set.push_exact(s.pos, s.lattice, &col[k * c..k * c + c]);
+        }
+        let pixels = set.render(method, width, height);
         Ok(DecodedImage {
             image: to_image(h.layout, width, height, pixels),
             samples_used: used,

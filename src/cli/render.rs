@@ -64,7 +64,11 @@ fn samples(a: &RenderArgs) -> Result<(Vec<Point>, Vec<u8>, (u32, u32))> {
                 }
             })
             .collect();
-        return Ok((pos.to_vec(), rgb, (h.width, h.height)));
+        return Ok((
+            pos.iter().map(|s| s.pos).collect(),
+            rgb,
+            (h.width, h.height),
+        ));
     }
     let img = image::load_from_memory(&bytes)
         .with_context(|| format!("cannot read image {}", a.input.display()))?

@@ -5,7 +5,11 @@
 mod cut_and_project;
 mod cyclotomic;
 mod golden;
+mod incircle;
 
 pub use cut_and_project::{disk_candidates, one_d};
 pub use cyclotomic::{decagon_forms, sign_plus_sin72, zeta_f64, ZZeta, SIN72};
 pub use golden::{order_key, ZTau, TAU};
+pub use incircle::{
+    incircle, incircle_value, orient, orient_value, within_exact_limit, EXACT_LIMIT,
+};

@@ -104,6 +104,24 @@ impl Boundary {
         Boundary { segments }
     }
 
+    /// The boundary made of the given hull edges (end points in source pixels, sample indices).
+    pub(crate) fn from_edges(
+        edges: impl Iterator<Item = ([f64; 2], [f64; 2], usize, usize)>,
+        colours: &[u8],
+        channels: usize,
+    ) -> Boundary {
+        let segments = edges
+            .map(|(a, b, ia, ib)| {
+                let (ca, cb) = (
+                    colour_of(colours, channels, ia),
+                    colour_of(colours, channels, ib),
+                );
+                Segment::new(a, b, ca, cb)
+            })
+            .collect();
+        Boundary { segments }
+    }
+
     /// Whether there is no sample at all.
     pub(crate) fn is_empty(&self) -> bool {
         self.segments.is_empty()

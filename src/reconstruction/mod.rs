@@ -36,6 +36,7 @@
 // Per-channel loops over fixed-size colour arrays read best with indices.
 #![allow(clippy::needless_range_loop)]
 
+mod cells;
 mod gouraud;
 mod hull;
 mod mesh;
@@ -46,9 +47,11 @@ mod shepard;
 use rayon::prelude::*;
 use spade::Triangulation as _;
 
+use crate::lattice::ZZeta;
 use crate::sites::Point;
 
-pub use gouraud::triangles;
+pub use cells::Cells;
+pub use gouraud::{cell_triangles, triangles};
 pub use mesh::{Triangulation, Vertex};
 #[doc(hidden)]
 pub use raster::raster_coverage;
@@ -111,6 +114,12 @@ impl Default for RenderOptions {
 /// lazily at the next render (an empty triangulation is bulk loaded); the Shepard grid is
 /// rebuilt only when samples were added since the last Shepard render.
 ///
+/// Samples pushed with their exact lattice point ([`SampleSet::push_exact`]) are drawn by
+/// Gouraud over the canonical Delaunay cells ([`Cells`], `spec/reconstruction.md`), so the
+/// picture depends on the set of samples only, not on the order they were pushed in nor on
+/// how the triangulation was built. If any sample lacks an exact point, `spade`'s own
+/// triangles are drawn.
+///
 /// ```
 /// use qcs::reconstruction::{Method, SampleSet};
 /// let mut set = SampleSet::new(16, 16, 3);
@@ -129,9 +138,15 @@ pub struct SampleSet {
     channels: usize,
     positions: Vec<Point>,
     colours: Vec<u8>,
+    /// Exact lattice point of each sample, if known.
+    lattice: Vec<Option<ZZeta>>,
+    /// Samples with an exact point.
+    exact: usize,
     mesh: Triangulation,
     synced: usize,
     grid: Option<Grid>,
+    /// Canonical cells and the sample count they were computed for.
+    cells: Option<(usize, Option<Cells>)>,
 }
 
 impl SampleSet {
@@ -144,9 +159,12 @@ impl SampleSet {
             channels: channels.clamp(1, 4),
             positions: Vec::new(),
             colours: Vec::new(),
+            lattice: Vec::new(),
+            exact: 0,
             mesh: Triangulation::new(),
             synced: 0,
             grid: None,
+            cells: None,
         }
     }
 
@@ -168,12 +186,66 @@ impl SampleSet {
     /// assert_eq!(set.len(), 1);
     /// ```
     pub fn try_push(&mut self, pos: Point, colour: &[u8]) -> crate::Result<()> {
+        self.push_inner(pos, None, colour)
+    }
+
+    /// Adds one sample with its exact lattice point `lattice` (`pos` must be its pixel
+    /// position `origin + ℓ·x` in some frame with ℓ > 0, e.g. a [`crate::sites::Site`]).
+    /// Ignored like [`SampleSet::push`] if unusable; see [`SampleSet::try_push_exact`].
+    ///
+    /// ```
+    /// use qcs::reconstruction::{Method, SampleSet};
+    /// use qcs::sites::Quasicrystal;
+    /// let mut set = SampleSet::new(48, 32, 1);
+    /// for s in Quasicrystal::new(48, 32)?.first(100) {
+    ///     set.push_exact(s.pos, s.lattice, &[(s.pos[0] * 4.0) as u8]);
+    /// }
+    /// assert!(set.cells().is_some());
+    /// assert_eq!(set.render(Method::Gouraud, 48, 32).len(), 48 * 32);
+    /// # Ok::<(), qcs::sites::FrameError>(())
+    /// ```
+    pub fn push_exact(&mut self, pos: Point, lattice: ZZeta, colour: &[u8]) {
+        let _ = self.try_push_exact(pos, lattice, colour);
+    }
+
+    /// [`SampleSet::push_exact`], or an error (and nothing added) if the position cannot be
+    /// triangulated or a lattice coordinate is beyond [`crate::lattice::EXACT_LIMIT`].
+    ///
+    /// ```
+    /// use qcs::lattice::ZZeta;
+    /// let mut set = qcs::reconstruction::SampleSet::new(8, 8, 1);
+    /// assert!(set.try_push_exact([1.0, 2.0], ZZeta::new([1, 2, 0, 0]), &[7]).is_ok());
+    /// assert!(set.try_push_exact([1.0, 3.0], ZZeta::new([1 << 40, 0, 0, 0]), &[7]).is_err());
+    /// assert_eq!(set.len(), 1);
+    /// ```
+    pub fn try_push_exact(
+        &mut self,
+        pos: Point,
+        lattice: ZZeta,
+        colour: &[u8],
+    ) -> crate::Result<()> {
+        if !crate::lattice::within_exact_limit(lattice) {
+            return Err(crate::Error::Parameter(format!(
+                "lattice point {lattice:?} is beyond the exact range"
+            )));
+        }
+        self.push_inner(pos, Some(lattice), colour)
+    }
+
+    fn push_inner(
+        &mut self,
+        pos: Point,
+        lattice: Option<ZZeta>,
+        colour: &[u8],
+    ) -> crate::Result<()> {
         let Some(p) = mesh::sanitize(pos) else {
             return Err(crate::Error::Parameter(format!(
                 "sample position {pos:?} is not usable"
             )));
         };
         self.positions.push(p);
+        self.exact += lattice.is_some() as usize;
+        self.lattice.push(lattice);
         for k in 0..self.channels {
             self.colours.push(colour.get(k).copied().unwrap_or(0));
         }
@@ -228,6 +300,28 @@ impl SampleSet {
         &self.mesh
     }
 
+    /// The canonical Delaunay cells of the samples, if every sample has an exact lattice
+    /// point (and there are at least three, not all collinear). Recomputed from the kept
+    /// triangulation when samples were added since the last call.
+    pub fn cells(&mut self) -> Option<&Cells> {
+        self.sync_cells();
+        self.cells.as_ref().and_then(|(_, c)| c.as_ref())
+    }
+
+    fn sync_cells(&mut self) {
+        mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
+        let n = self.positions.len();
+        if self.cells.as_ref().map(|c| c.0) == Some(n) {
+            return;
+        }
+        let cells = if self.exact == n && n >= 3 {
+            Cells::build(&self.mesh, &self.lattice).filter(|c| !c.is_empty())
+        } else {
+            None
+        };
+        self.cells = Some((n, cells));
+    }
+
     /// Renders a `width × height` picture, interleaved, `channels` bytes per pixel, in parallel.
     pub fn render(&mut self, method: Method, width: u32, height: u32) -> Vec<u8> {
         self.render_with(method, width, height, RenderOptions::default())
@@ -260,6 +354,9 @@ impl SampleSet {
         if self.positions.is_empty() {
             return vec![128; w * h * c];
         }
+        if method == Method::Gouraud {
+            self.sync_cells();
+        }
         let frame = Frame {
             width: w,
             height: h,
@@ -270,8 +367,8 @@ impl SampleSet {
         };
         match method {
             Method::Gouraud => {
-                mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
-                gouraud::render(&self.mesh, &frame, options.parallel)
+                let cells = self.cells.as_ref().and_then(|(_, c)| c.as_ref());
+                gouraud::render(&self.mesh, cells, &self.positions, &frame, options.parallel)
             }
             Method::Natural => {
                 mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);

@@ -1,0 +1,211 @@
+//! Canonical Delaunay cells (issue #11): cell statistics, Gouraud PSNR of the centroid rule
+//! against `spade`'s own split, and monotone sharpening.
+//!
+//! Run: `cargo run --release --example cells_table -- [stats] [psnr] [monotone] [DIR]`
+//! (default: all three parts on `../shared/corpus/dev`, or `/work/shared/corpus/dev`).
+//!
+//! Sites: the quasicrystal sequence in the default frame; sample colour: area mean
+//! (`SampleColour::Area`) for a file of exactly N samples; picture rendered at source size.
+//! "spade" pushes the same samples without exact lattice points, so the triangulation's own
+//! split of cocircular cells is drawn.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use qcs::reconstruction::{Method, SampleSet};
+use qcs::sampling::{SampleColour, SourceImage};
+use qcs::sites::Quasicrystal;
+
+fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    let se: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(&x, &y)| {
+            let d = x as f64 - y as f64;
+            d * d
+        })
+        .sum();
+    let mse = se / a.len() as f64;
+    10.0 * (255.0 * 255.0 / mse.max(1e-12)).log10()
+}
+
+struct Photo {
+    name: String,
+    w: u32,
+    h: u32,
+    rgb: Vec<u8>,
+}
+
+fn photos(dir: &PathBuf) -> Vec<Photo> {
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).collect())
+        .unwrap_or_default();
+    files.retain(|p| p.extension().is_some_and(|e| e == "png"));
+    files.sort();
+    files
+        .into_iter()
+        .filter_map(|p| {
+            let img = image::open(&p).ok()?.to_rgb8();
+            Some(Photo {
+                name: p.file_stem()?.to_string_lossy().into_owned(),
+                w: img.width(),
+                h: img.height(),
+                rgb: img.into_raw(),
+            })
+        })
+        .collect()
+}
+
+/// Gouraud PSNR with the canonical rule and with spade's split, for the first `n` sites.
+fn both(photo: &Photo, src: &SourceImage<'_>, qc: &Quasicrystal, n: usize) -> (f64, f64) {
+    let sites = qc.first(n);
+    let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
+    let col = src.colours(&pos, SampleColour::Area, n);
+    let mut exact = SampleSet::new(photo.w, photo.h, 3);
+    let mut plain = SampleSet::new(photo.w, photo.h, 3);
+    for (k, s) in sites.iter().enumerate() {
+        exact.push_exact(s.pos, s.lattice, &col[3 * k..3 * k + 3]);
+        plain.push(s.pos, &col[3 * k..3 * k + 3]);
+    }
+    let a = exact.render(Method::Gouraud, photo.w, photo.h);
+    let b = plain.render(Method::Gouraud, photo.w, photo.h);
+    (psnr(&a, &photo.rgb), psnr(&b, &photo.rgb))
+}
+
+fn polygon_area(pts: &[[f64; 2]]) -> f64 {
+    let k = pts.len();
+    (0..k)
+        .map(|i| {
+            let (a, b) = (pts[i], pts[(i + 1) % k]);
+            a[0] * b[1] - a[1] * b[0]
+        })
+        .sum::<f64>()
+        .abs()
+        / 2.0
+}
+
+fn stats() {
+    println!("## Cell statistics, 512×512, default frame\n");
+    println!("| sites | 3-cells | 4-cells | 5-cells | ≥6 | area in k≥4 | flips | cells time |");
+    println!("|---|---|---|---|---|---|---|---|");
+    let qc = Quasicrystal::new(512, 512).expect("frame");
+    for n in [1089usize, 4225, 16641, 65536] {
+        let mut set = SampleSet::new(512, 512, 1);
+        for s in qc.first(n) {
+            set.push_exact(s.pos, s.lattice, &[0]);
+        }
+        let _ = set.triangulation();
+        let positions = set.positions().to_vec();
+        let t0 = Instant::now();
+        let cells = set.cells().expect("exact").clone();
+        let dt = t0.elapsed();
+        let h = cells.histogram();
+        let g = |k: usize| h.get(k).copied().unwrap_or(0);
+        let more: usize = h.iter().skip(6).sum();
+        let (mut big, mut all) = (0.0, 0.0);
+        for c in cells.iter() {
+            let pts: Vec<_> = c.iter().map(|&i| positions[i as usize]).collect();
+            let a = polygon_area(&pts);
+            all += a;
+            if c.len() >= 4 {
+                big += a;
+            }
+        }
+        println!(
+            "| {n} | {} | {} | {} | {more} | {:.1}% | {} | {:.1} ms |",
+            g(3),
+            g(4),
+            g(5),
+            100.0 * big / all,
+            cells.flips(),
+            dt.as_secs_f64() * 1e3
+        );
+    }
+    println!();
+}
+
+fn table(list: &[Photo]) {
+    println!("## Gouraud PSNR (dB): canonical cells / spade split / gain\n");
+    println!("| photo | 1089 | 4225 | 16641 |");
+    println!("|---|---|---|---|");
+    for p in list {
+        let src = SourceImage::new(&p.rgb, p.w, p.h, 3);
+        let qc = Quasicrystal::new(p.w, p.h).expect("frame");
+        let cols: Vec<String> = [1089usize, 4225, 16641]
+            .iter()
+            .map(|&n| {
+                let (a, b) = both(p, &src, &qc, n);
+                format!("{a:.2} / {b:.2} / {:+.2}", a - b)
+            })
+            .collect();
+        println!("| {} | {} |", p.name, cols.join(" | "));
+    }
+    println!();
+}
+
+fn monotone(list: &[Photo]) {
+    println!("## Monotone sharpening, N = 1000..=6000 step 50 (100 steps)\n");
+    println!("| photo | rule | falling steps | worst step | sum of losses |");
+    println!("|---|---|---|---|---|");
+    for p in list
+        .iter()
+        .filter(|p| ["astronaut", "coffee"].contains(&p.name.as_str()))
+    {
+        let src = SourceImage::new(&p.rgb, p.w, p.h, 3);
+        let qc = Quasicrystal::new(p.w, p.h).expect("frame");
+        let series: Vec<(f64, f64)> = (1000..=6000)
+            .step_by(50)
+            .map(|n| both(p, &src, &qc, n))
+            .collect();
+        for (rule, pick) in [("canonical", 0), ("spade", 1)] {
+            let v: Vec<f64> = series
+                .iter()
+                .map(|s| if pick == 0 { s.0 } else { s.1 })
+                .collect();
+            let d: Vec<f64> = v.windows(2).map(|w| w[1] - w[0]).collect();
+            let falls = d.iter().filter(|&&x| x < 0.0).count();
+            let worst = d.iter().copied().fold(0.0f64, f64::min);
+            let sum: f64 = d.iter().filter(|&&x| x < 0.0).sum();
+            println!(
+                "| {} | {rule} | {falls}/{} ({:.0}%) | {worst:.3} dB | {sum:.3} dB |",
+                p.name,
+                d.len(),
+                100.0 * falls as f64 / d.len() as f64
+            );
+        }
+    }
+    println!();
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let dir = args
+        .iter()
+        .find(|a| a.contains('/'))
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            let rel = PathBuf::from("../shared/corpus/dev");
+            if rel.is_dir() {
+                rel
+            } else {
+                PathBuf::from("/work/shared/corpus/dev")
+            }
+        });
+    let want = |s: &str| args.iter().all(|a| a.contains('/')) || args.iter().any(|a| a == s);
+    if want("stats") {
+        stats();
+    }
+    if want("psnr") || want("monotone") {
+        let list = photos(&dir);
+        if list.is_empty() {
+            eprintln!("no PNG in {}", dir.display());
+            return;
+        }
+        if want("psnr") {
+            table(&list);
+        }
+        if want("monotone") {
+            monotone(&list);
+        }
+    }
+}
