@@ -1,5 +1,6 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
+use crate::coding::predictive::{fixed_position, Params, PredictiveDecoder};
 use crate::coding::raw::RawUnpacker;
 use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
@@ -81,6 +82,8 @@ pub struct StreamDecoder {
     verified: u64,
     levels_complete: u32,
     unpacker: Option<RawUnpacker>,
+    /// The predictive coding's decoder (coding 1), kept across levels.
+    predictive: Option<PredictiveDecoder>,
     set: Option<SampleSet>,
     stopped: Option<FormatError>,
     metadata: Vec<Metadata>,
@@ -106,6 +109,7 @@ impl StreamDecoder {
             verified: 0,
             levels_complete: 0,
             unpacker: None,
+            predictive: None,
             set: None,
             stopped: None,
             metadata: Vec::new(),
@@ -145,10 +149,23 @@ impl StreamDecoder {
                         pixels: h.width as u64 * h.height as u64,
                     }));
                 }
+                if let Coding::Predictive { params } = &h.coding {
+                    let params = Params::from_bytes(params)?;
+                    self.predictive = Some(PredictiveDecoder::new(
+                        params,
+                        h.layout.channels(),
+                        h.width,
+                        h.height,
+                    )?);
+                }
                 self.seq = Some(seq);
                 self.header = Some(h.clone());
             }
-            Event::LevelStart { samples, .. } => {
+            Event::LevelStart {
+                samples,
+                payload_len,
+                ..
+            } => {
                 let h = self.header.as_ref().expect("header precedes levels");
                 self.unpacker = match h.coding {
                     Coding::Raw { bits } => Some(RawUnpacker::new(
@@ -157,15 +174,24 @@ impl StreamDecoder {
                         samples.end - samples.start,
                     )?),
                     Coding::Predictive { .. } => {
-                        return Err(Error::Parameter(
-                            "the predictive coding is not supported yet".into(),
-                        ))
+                        let seq = self.seq.expect("header precedes levels");
+                        let fixed: Vec<_> = seq.first(samples.end as usize)
+                            [samples.start as usize..]
+                            .iter()
+                            .map(|s| fixed_position(&seq.frame(), s.lattice))
+                            .collect();
+                        if let Some(p) = &mut self.predictive {
+                            p.start_level(&fixed, *payload_len as usize)?;
+                        }
+                        None
                     }
                 };
             }
             Event::LevelData { bytes, .. } => {
                 if let Some(u) = &mut self.unpacker {
                     u.push(bytes, &mut self.colours);
+                } else if let Some(p) = &mut self.predictive {
+                    p.push(bytes, &mut self.colours)?;
                 }
             }
             Event::LevelVerified { .. } => {

@@ -1,5 +1,6 @@
 //! Image → `.qcs` bytes: sites, sample colours, colour coding, container.
 
+use crate::coding::predictive::{fixed_position, Params, PredictiveEncoder};
 use crate::container::{Coding, ContainerWriter, Header, LatticeFields, Layout};
 use crate::sampling::{SampleColour, SourceImage};
 use crate::sites::{Frame, Quasicrystal};
@@ -124,7 +125,18 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             origin_y: frame.origin[1],
         });
     }
-    let positions: Vec<_> = seq.first(n as usize).into_iter().map(|s| s.pos).collect();
+    let sites = seq.first(n as usize);
+    let positions: Vec<_> = sites.iter().map(|s| s.pos).collect();
+    let mut predictive = match &opts.coding {
+        Coding::Predictive { params } => Some((
+            PredictiveEncoder::new(Params::from_bytes(params)?, channels as u8, width, height)?,
+            sites
+                .iter()
+                .map(|s| fixed_position(&frame, s.lattice))
+                .collect::<Vec<_>>(),
+        )),
+        Coding::Raw { .. } => None,
+    };
     let source = SourceImage::new(&pixels, width, height, channels);
     let colours = source.colours(&positions, opts.colour, n as usize);
     let mut w = ContainerWriter::new(writer, &header)?;
@@ -133,11 +145,12 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         let values = &colours[range.start as usize * channels..range.end as usize * channels];
         let payload = match &opts.coding {
             Coding::Raw { bits } => crate::coding::raw::pack(values, *bits)?,
-            Coding::Predictive { .. } => {
-                return Err(Error::Parameter(
-                    "the predictive coding is not available yet".into(),
-                ))
-            }
+            Coding::Predictive { .. } => match &mut predictive {
+                Some((enc, fixed)) => {
+                    enc.encode_level(&fixed[range.start as usize..range.end as usize], values)?
+                }
+                None => unreachable!("predictive state exists for the predictive coding"),
+            },
         };
         w.write_level(&payload)?;
         if k == 0 {

@@ -52,6 +52,13 @@ pub struct EncodeArgs {
     /// Bits per channel of the raw coding, 1–8.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(1..=8))]
     pub bits: u8,
+    /// Predictive coding (coding 1) at this quality, 0–100: luma step
+    /// round(1 + (100 − Q)²/100), chroma step 2·step − 1 (100 = lossless, 60 default choice).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(0..=100), conflicts_with = "lossless")]
+    pub quality: Option<u8>,
+    /// Predictive coding with exact sample values (step 1).
+    #[arg(long)]
+    pub lossless: bool,
     /// What a sample's colour is.
     #[arg(long, value_enum, default_value = "progressive")]
     pub colour: ColourArg,
@@ -67,6 +74,15 @@ impl EncodeArgs {
             coding: Coding::Raw { bits: self.bits },
             ..Default::default()
         };
+        if self.lossless {
+            o.coding = Coding::Predictive {
+                params: qcs::coding::predictive::Params::lossless().to_bytes(),
+            };
+        } else if let Some(q) = self.quality {
+            o.coding = Coding::Predictive {
+                params: qcs::coding::predictive::Params::from_quality(q).to_bytes(),
+            };
+        }
         if let Some(d) = self.density {
             o.density = d;
         }

@@ -1,0 +1,309 @@
+//! An adaptive binary range coder (LZMA style, carry-less decoding), the entropy coder of the
+//! predictive coding (spec/format.md §Coding 1).
+//!
+//! The coder keeps a 32-bit `range`; a bit is coded with a 12-bit probability `p` that it is 0:
+//! `bound = (range >> 12) · p`. Probabilities adapt after every bit with a rate that starts fast
+//! and slows down ([`Prob`]). The encoder drops the constant leading zero byte of the classic LZMA
+//! layout and flushes as few bytes as needed, trimming trailing zeros: the decoder reads 0x00 past
+//! the end of a payload.
+//!
+//! ```
+//! use qcs::coding::range::{Prob, RangeDecoder, RangeEncoder};
+//! let bits = [true, false, false, true, true, true, false, true];
+//! let mut p = Prob::default();
+//! let mut enc = RangeEncoder::new();
+//! for &b in &bits {
+//!     enc.encode(&mut p, b);
+//! }
+//! let bytes = enc.finish();
+//! let mut p = Prob::default();
+//! let mut dec = RangeDecoder::new();
+//! for &b in &bits {
+//!     assert_eq!(dec.decode(&mut p, &bytes, bytes.len()), Some(b));
+//! }
+//! ```
+
+/// Probability resolution: probabilities are in `1..4096` (units of 1/4096).
+pub const PROB_BITS: u32 = 12;
+const PROB_ONE: u16 = 1 << PROB_BITS;
+const TOP: u32 = 1 << 24;
+
+/// An adaptive probability that the next bit is 0, with an update count that sets the
+/// adaptation rate: shift `min(1 + n/2, 5)` after `n` updates (fast at first, then steady).
+///
+/// ```
+/// let mut p = qcs::coding::range::Prob::default();
+/// assert_eq!(p.p0(), 2048);
+/// p.update(false);
+/// assert_eq!(p.p0(), 3072); // first update: shift 1
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Prob {
+    p: u16,
+    n: u8,
+}
+
+impl Default for Prob {
+    fn default() -> Self {
+        Prob {
+            p: PROB_ONE / 2,
+            n: 0,
+        }
+    }
+}
+
+impl Prob {
+    /// Probability of a 0 bit, in 1/4096.
+    pub fn p0(&self) -> u16 {
+        self.p
+    }
+
+    /// Adapts to an observed bit. `p` stays within `1..=4095`.
+    pub fn update(&mut self, bit: bool) {
+        let shift = (1 + self.n as u32 / 2).min(5);
+        if bit {
+            self.p -= self.p >> shift;
+        } else {
+            self.p += (PROB_ONE - self.p) >> shift;
+        }
+        self.n = self.n.saturating_add(1).min(16);
+    }
+}
+
+/// The encoder: bits in, bytes out.
+#[derive(Clone, Debug)]
+pub struct RangeEncoder {
+    low: u64,
+    range: u32,
+    cache: u8,
+    cache_size: u64,
+    first: bool,
+    out: Vec<u8>,
+}
+
+impl Default for RangeEncoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RangeEncoder {
+    /// An encoder at the start of a payload.
+    pub fn new() -> Self {
+        RangeEncoder {
+            low: 0,
+            range: u32::MAX,
+            cache: 0,
+            cache_size: 1,
+            first: true,
+            out: Vec::new(),
+        }
+    }
+
+    fn shift_low(&mut self) {
+        if (self.low as u32) < 0xFF00_0000 || (self.low >> 32) != 0 {
+            let carry = (self.low >> 32) as u8;
+            let mut temp = self.cache;
+            loop {
+                if self.first {
+                    // The classic leading byte is always 0: not stored.
+                    self.first = false;
+                } else {
+                    self.out.push(temp.wrapping_add(carry));
+                }
+                temp = 0xFF;
+                self.cache_size -= 1;
+                if self.cache_size == 0 {
+                    break;
+                }
+            }
+            self.cache = ((self.low >> 24) & 0xFF) as u8;
+        }
+        self.cache_size += 1;
+        self.low = (self.low & 0x00FF_FFFF) << 8;
+    }
+
+    /// Codes `bit` with probability `p` (then adapts `p`).
+    pub fn encode(&mut self, p: &mut Prob, bit: bool) {
+        let bound = (self.range >> PROB_BITS) * p.p as u32;
+        if bit {
+            self.low += bound as u64;
+            self.range -= bound;
+        } else {
+            self.range = bound;
+        }
+        p.update(bit);
+        while self.range < TOP {
+            self.range <<= 8;
+            self.shift_low();
+        }
+    }
+
+    /// Bytes the payload would have if it ended now (an upper bound, before trimming).
+    pub fn len_estimate(&self) -> usize {
+        self.out.len() + self.cache_size as usize + 4
+    }
+
+    /// Ends the payload: picks the value in the final interval with the most trailing zero
+    /// bytes, writes it out and trims trailing zero bytes.
+    pub fn finish(mut self) -> Vec<u8> {
+        let hi = self.low + self.range as u64 - 1;
+        for z in (0..=4u32).rev() {
+            let mask = (1u64 << (8 * z)) - 1;
+            let v = (self.low + mask) & !mask;
+            if v <= hi {
+                self.low = v;
+                break;
+            }
+        }
+        for _ in 0..5 {
+            self.shift_low();
+        }
+        while self.out.last() == Some(&0) {
+            self.out.pop();
+        }
+        self.out
+    }
+}
+
+/// The decoder's state: bits out of a payload that may still be arriving.
+///
+/// Every call names the bytes received so far and the payload length; a byte at or past the
+/// length reads as 0x00. A decode that would need a byte not yet received returns `None` and
+/// leaves the decoder unusable until restored from a copy (it is `Copy`, so callers snapshot it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RangeDecoder {
+    range: u32,
+    code: u32,
+    pos: usize,
+    started: bool,
+}
+
+impl Default for RangeDecoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RangeDecoder {
+    /// A decoder at the start of a payload.
+    pub fn new() -> Self {
+        RangeDecoder {
+            range: u32::MAX,
+            code: 0,
+            pos: 0,
+            started: false,
+        }
+    }
+
+    /// Bytes of the payload read so far (the 4-byte code window included).
+    pub fn position(&self) -> usize {
+        self.pos
+    }
+
+    fn byte(&mut self, bytes: &[u8], len: usize) -> Option<u8> {
+        let b = if self.pos < bytes.len() {
+            bytes[self.pos]
+        } else if self.pos >= len {
+            0
+        } else {
+            return None;
+        };
+        self.pos += 1;
+        Some(b)
+    }
+
+    /// Decodes one bit with probability `p` (then adapts `p`), from `bytes` (received so far)
+    /// of a payload of `len` bytes. `None`: a needed byte has not arrived; `p` is unchanged.
+    pub fn decode(&mut self, p: &mut Prob, bytes: &[u8], len: usize) -> Option<bool> {
+        if !self.started {
+            for _ in 0..4 {
+                self.code = (self.code << 8) | self.byte(bytes, len)? as u32;
+            }
+            self.started = true;
+        }
+        let bound = (self.range >> PROB_BITS) * p.p as u32;
+        let bit = if self.code < bound {
+            self.range = bound;
+            false
+        } else {
+            self.code -= bound;
+            self.range -= bound;
+            true
+        };
+        while self.range < TOP {
+            self.range <<= 8;
+            self.code = (self.code << 8) | self.byte(bytes, len)? as u32;
+        }
+        p.update(bit);
+        Some(bit)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lcg(s: &mut u64) -> u32 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*s >> 33) as u32
+    }
+
+    #[test]
+    fn round_trip_skewed_and_random_bits() {
+        let mut seed = 7;
+        for &(n, skew) in &[
+            (0usize, 50u32),
+            (1, 50),
+            (10, 3),
+            (1000, 50),
+            (5000, 2),
+            (5000, 98),
+        ] {
+            let bits: Vec<bool> = (0..n).map(|_| lcg(&mut seed) % 100 < skew).collect();
+            let mut probs = [Prob::default(); 4];
+            let mut enc = RangeEncoder::new();
+            for (i, &b) in bits.iter().enumerate() {
+                enc.encode(&mut probs[i % 4], b);
+            }
+            let bytes = enc.finish();
+            let mut probs = [Prob::default(); 4];
+            let mut dec = RangeDecoder::new();
+            for (i, &b) in bits.iter().enumerate() {
+                assert_eq!(dec.decode(&mut probs[i % 4], &bytes, bytes.len()), Some(b));
+            }
+            if skew <= 3 || skew >= 97 {
+                assert!(
+                    bytes.len() * 8 < n / 3,
+                    "{} bytes for {n} skewed bits",
+                    bytes.len()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn missing_bytes_are_reported_not_guessed() {
+        let mut seed = 3;
+        let bits: Vec<bool> = (0..400).map(|_| lcg(&mut seed) % 2 == 0).collect();
+        let mut p = Prob::default();
+        let mut enc = RangeEncoder::new();
+        for &b in &bits {
+            enc.encode(&mut p, b);
+        }
+        let bytes = enc.finish();
+        for cut in 0..bytes.len() {
+            let mut p = Prob::default();
+            let mut dec = RangeDecoder::new();
+            let mut k = 0;
+            while let Some(b) = dec.decode(&mut p, &bytes[..cut], bytes.len()) {
+                assert_eq!(b, bits[k]);
+                assert!(dec.position() <= cut);
+                k += 1;
+            }
+            assert!(k < bits.len());
+        }
+    }
+}
