@@ -163,6 +163,18 @@ fn monotone(list: &[Photo]) {
                 .map(|s| if pick == 0 { s.0 } else { s.1 })
                 .collect();
             let d: Vec<f64> = v.windows(2).map(|w| w[1] - w[0]).collect();
+            if std::env::var_os("CELLS_VERBOSE").is_some() {
+                for (k, x) in d.iter().enumerate() {
+                    if *x < 0.0 {
+                        eprintln!(
+                            "{} {rule}: N = {} → {}: {x:+.3} dB",
+                            p.name,
+                            1000 + 50 * k,
+                            1050 + 50 * k
+                        );
+                    }
+                }
+            }
             let falls = d.iter().filter(|&&x| x < 0.0).count();
             let worst = d.iter().copied().fold(0.0f64, f64::min);
             let sum: f64 = d.iter().filter(|&&x| x < 0.0).sum();

@@ -293,7 +293,7 @@ impl StreamDecoder {
         let have = set.len();
         let (sites, col) = self.samples(n);
         for k in have..n as usize {
-            set.push_exact(sites[k].pos, sites[k].lattice, &col[k * c..k * c + c]);
+            push_site(&mut set, &sites[k], &col[k * c..k * c + c]);
         }
         let pixels = set.render(method, width, height);
         self.set = Some(set);
@@ -331,7 +331,7 @@ impl StreamDecoder {
         let used = sites.len() as u64;
         let mut set = SampleSet::new(h.width, h.height, c);
         for (k, s) in sites.iter().enumerate() {
-            set.push_exact(s.pos, s.lattice, &col[k * c..k * c + c]);
+            push_site(&mut set, s, &col[k * c..k * c + c]);
         }
         let pixels = set.render(method, width, height);
         Ok(DecodedImage {
@@ -341,6 +341,14 @@ impl StreamDecoder {
             levels_complete: self.levels_complete,
             is_final: used == h.total_samples && self.verified == h.total_samples,
         })
+    }
+}
+
+/// Pushes a site with its exact lattice point (Gouraud then draws the canonical cells), or
+/// without it if it is beyond the exact range, so that sample indices stay aligned.
+fn push_site(set: &mut SampleSet, site: &Site, colour: &[u8]) {
+    if set.try_push_exact(site.pos, site.lattice, colour).is_err() {
+        set.push(site.pos, colour);
     }
 }
 

@@ -556,3 +556,31 @@ fn sharpening_is_nearly_monotone() {
     );
     assert!(mean(&series[0]) > mean(&series[1]) + 0.1);
 }
+
+#[test]
+fn spec_worked_example() {
+    // spec/reconstruction.md §5: the regular pentagon of unit roots, 8 px per root.
+    let frame = qcs::sites::Frame {
+        root_len: 8 << 16,
+        origin: [16 << 16, 16 << 16],
+    };
+    let mut set = SampleSet::new(32, 32, 1);
+    let mut plain = SampleSet::new(32, 32, 1);
+    for m in 0..5 {
+        let x = zeta(m);
+        set.push_exact(frame.position(x), x, &[50 * m as u8]);
+        plain.push(frame.position(x), &[50 * m as u8]);
+    }
+    let img = set.render(Method::Gouraud, 32, 32);
+    assert_eq!(
+        set.cells().map(|c| c.histogram()),
+        Some(vec![0, 0, 0, 0, 0, 1])
+    );
+    assert_eq!(img[16 * 32 + 20], 42);
+    assert_eq!(img[20 * 32 + 16], 74);
+    assert_eq!(img[12 * 32 + 12], 139);
+    // Mean colour at the centroid (16, 16); pixel (15, 15) has its centre 0.5 px from it.
+    assert!((img[15 * 32 + 15] as i32 - 100).abs() <= 8);
+    // spade's split (a fan) draws another picture.
+    assert_ne!(plain.render(Method::Gouraud, 32, 32), img);
+}

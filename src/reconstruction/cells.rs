@@ -346,11 +346,9 @@ impl Mesh {
                 }
             }
             edges.sort_unstable();
-            let start = edges
-                .iter()
-                .map(|x| x.0)
-                .min_by_key(|&i| pt(i))
-                .unwrap_or(edges[0].0);
+            let Some(start) = edges.iter().map(|x| x.0).min_by_key(|&i| pt(i)) else {
+                continue;
+            };
             let mut cur = start;
             for _ in 0..edges.len() {
                 vertices.push(cur);

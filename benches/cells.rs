@@ -1,0 +1,66 @@
+//! Canonical Delaunay cells against spade's plain triangles: 1 Mpixel Gouraud render,
+//! single-threaded, same quasicrystal sites and colours (issue #11).
+//!
+//! * `gouraud_plain`: samples pushed without exact points (spade's own split);
+//! * `gouraud_cells`: samples pushed with exact points, cells already computed (one-shot
+//!   decode renders once, so add `cells_build` for its cost);
+//! * `cells_build`: the canonical cells from the kept triangulation (what a streaming render
+//!   recomputes after new samples arrived).
+//!
+//! Run: `cargo bench --bench cells -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use image::{imageops::FilterType, RgbImage};
+use qcs::lattice::ZZeta;
+use qcs::reconstruction::{Cells, Method, RenderOptions, SampleSet};
+use qcs::sites::Quasicrystal;
+
+const SIDE: u32 = 1024;
+const COUNTS: [usize; 2] = [16_384, 65_536];
+
+fn photo() -> RgbImage {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let img = image::open(path).expect("assets/rocket.png").to_rgb8();
+    image::imageops::resize(&img, SIDE, SIDE, FilterType::Triangle)
+}
+
+fn bench(c: &mut Criterion) {
+    let img = photo();
+    let single = RenderOptions::single_threaded();
+    let qc = Quasicrystal::new(SIDE, SIDE).expect("frame");
+    let mut g = c.benchmark_group("cells_1mpx_single");
+    g.sample_size(10);
+    for &n in &COUNTS {
+        let sites = qc.first(n);
+        let mut exact = SampleSet::new(SIDE, SIDE, 3);
+        let mut plain = SampleSet::new(SIDE, SIDE, 3);
+        for s in &sites {
+            let (x, y) = (
+                (s.pos[0] as u32).min(SIDE - 1),
+                (s.pos[1] as u32).min(SIDE - 1),
+            );
+            let col = img.get_pixel(x, y).0;
+            exact.push_exact(s.pos, s.lattice, &col);
+            plain.push(s.pos, &col);
+        }
+        let _ = plain.render_with(Method::Gouraud, 8, 8, single);
+        let _ = exact.render_with(Method::Gouraud, 8, 8, single); // computes the cells
+        g.bench_function(BenchmarkId::new("gouraud_plain", n), |b| {
+            b.iter(|| black_box(plain.render_with(Method::Gouraud, SIDE, SIDE, single)))
+        });
+        g.bench_function(BenchmarkId::new("gouraud_cells", n), |b| {
+            b.iter(|| black_box(exact.render_with(Method::Gouraud, SIDE, SIDE, single)))
+        });
+        let lattice: Vec<Option<ZZeta>> = sites.iter().map(|s| Some(s.lattice)).collect();
+        let mesh = exact.triangulation().clone();
+        g.bench_function(BenchmarkId::new("cells_build", n), |b| {
+            b.iter(|| black_box(Cells::build(&mesh, &lattice).map(|c| c.len())))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
