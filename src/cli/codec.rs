@@ -35,6 +35,9 @@ pub enum ColourArg {
     Progressive,
 }
 
+/// The CLI's default quality of the predictive coding.
+pub const DEFAULT_QUALITY: u8 = 75;
+
 #[derive(Args, Debug)]
 pub struct EncodeArgs {
     /// Input image(s) or directories, then the output .qcs when encoding one file without --out-dir.
@@ -49,11 +52,11 @@ pub struct EncodeArgs {
     /// Samples per pixel (default 0.125).
     #[arg(long)]
     pub density: Option<f64>,
-    /// Bits per channel of the raw coding, 1–8.
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(1..=8))]
-    pub bits: u8,
-    /// Predictive coding (coding 1) at this quality, 0–100: luma step
-    /// round(1 + (100 − Q)²/100), chroma step 2·step − 1 (100 = lossless, 60 default choice).
+    /// Raw coding (coding 0) at this many bits per channel, 1–8, instead of the predictive coding.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8), conflicts_with_all = ["quality", "lossless"])]
+    pub bits: Option<u8>,
+    /// Predictive coding (coding 1) at this quality, 0–100 (the default, at 75): luma step
+    /// 1 + ((100 − Q)² + 50)/100, chroma step 2·step − 1 (100 = lossless).
     #[arg(long, value_parser = clap::value_parser!(u8).range(0..=100), conflicts_with = "lossless")]
     pub quality: Option<u8>,
     /// Predictive coding with exact sample values (step 1).
@@ -69,20 +72,22 @@ pub struct EncodeArgs {
 
 impl EncodeArgs {
     fn options(&self) -> EncodeOptions {
+        let params = if self.lossless {
+            qcs::coding::predictive::Params::lossless()
+        } else {
+            qcs::coding::predictive::Params::from_quality(self.quality.unwrap_or(DEFAULT_QUALITY))
+        };
+        let coding = match self.bits {
+            Some(bits) => Coding::Raw { bits },
+            None => Coding::Predictive {
+                params: params.to_bytes(),
+            },
+        };
         let mut o = EncodeOptions {
             samples: self.samples,
-            coding: Coding::Raw { bits: self.bits },
+            coding,
             ..Default::default()
         };
-        if self.lossless {
-            o.coding = Coding::Predictive {
-                params: qcs::coding::predictive::Params::lossless().to_bytes(),
-            };
-        } else if let Some(q) = self.quality {
-            o.coding = Coding::Predictive {
-                params: qcs::coding::predictive::Params::from_quality(q).to_bytes(),
-            };
-        }
         if let Some(d) = self.density {
             o.density = d;
         }
@@ -451,8 +456,10 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
         .with_context(|| format!("cannot create {}", a.out_dir.display()))?;
     let img = image::open(&a.input)
         .with_context(|| format!("cannot read image {}", a.input.display()))?;
+    let params = qcs::coding::predictive::Params::from_quality(DEFAULT_QUALITY);
     let opts = EncodeOptions {
         samples: a.samples,
+        coding: Coding::Predictive { params: params.to_bytes() },
         ..Default::default()
     };
     let bytes = qcs::encode(&img, &opts)?;
