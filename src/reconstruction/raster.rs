@@ -151,7 +151,8 @@ pub(crate) struct Setup {
 }
 
 impl Setup {
-    /// Prepares `t`; `None` for degenerate (zero-area or non-finite) triangles.
+    /// Prepares `t`; `None` for degenerate (zero-area or non-finite) triangles and for those
+    /// whose bounding box holds no pixel centre.
     pub(crate) fn new(t: &RasterTriangle) -> Option<Setup> {
         let [p0, mut p1, mut p2] = [t[0], t[1], t[2]];
         let area = |p1: &RasterVertex, p2: &RasterVertex| {
@@ -166,11 +167,6 @@ impl Setup {
             std::mem::swap(&mut p1, &mut p2);
             det = -det;
         }
-        let edges = [
-            Edge::new(p0.pos, p1.pos),
-            Edge::new(p1.pos, p2.pos),
-            Edge::new(p2.pos, p0.pos),
-        ];
         let ymin = p0.pos[1].min(p1.pos[1]).min(p2.pos[1]);
         let ymax = p0.pos[1].max(p1.pos[1]).max(p2.pos[1]);
         // Row j is sampled at j + 0.5. Rows whose centre line is farther than a rounding margin
@@ -181,6 +177,19 @@ impl Setup {
         if rows.0 > rows.1 {
             return None;
         }
+        // Likewise columns: most triangles of a downscaled render hold no pixel centre at all
+        // and are dropped here, before their edges and colour plane are set up.
+        let xmin = p0.pos[0].min(p1.pos[0]).min(p2.pos[0]);
+        let xmax = p0.pos[0].max(p1.pos[0]).max(p2.pos[0]);
+        let mx = 1e-7 * (1.0 + xmin.abs().max(xmax.abs()));
+        if ceil_i64(xmin - 0.5 - mx) > floor_i64(xmax - 0.5 + mx) {
+            return None;
+        }
+        let edges = [
+            Edge::new(p0.pos, p1.pos),
+            Edge::new(p1.pos, p2.pos),
+            Edge::new(p2.pos, p0.pos),
+        ];
         let (d1x, d1y) = (p1.pos[0] - p0.pos[0], p1.pos[1] - p0.pos[1]);
         let (d2x, d2y) = (p2.pos[0] - p0.pos[0], p2.pos[1] - p0.pos[1]);
         let mut c0 = [0.0; 4];

@@ -233,8 +233,12 @@ impl Grid {
     }
 }
 
-/// Tile side (source pixels) relative to the mean sample spacing.
-const TILE_FACTOR: f64 = 1.0;
+/// Tile side bounds (source pixels) relative to the mean sample spacing: small tiles scan fewer
+/// candidates per point, large ones gather candidates for more points at once.
+const TILE_MIN: f64 = 0.35;
+const TILE_MAX: f64 = 1.0;
+/// Preferred tile side in query steps (about this many points per tile side).
+const TILE_STEPS: f64 = 8.0;
 
 /// One tile's candidate samples: every sample that can be among the 4 nearest of a point of
 /// the tile, sorted by distance to the tile centre.
@@ -269,8 +273,9 @@ impl<'a> Tiled<'a> {
     /// Queries on `grid` at points spaced about `step` source pixels apart.
     pub(crate) fn new(grid: &'a Grid, step: [f64; 2]) -> Self {
         let spacing = grid.cs / PER_CELL.sqrt();
-        let side = spacing * TILE_FACTOR;
-        let useful = grid.len() >= 4 && side.is_finite() && side >= 2.0 * step[0].max(step[1]);
+        let st = step[0].max(step[1]);
+        let side = (TILE_STEPS * st).clamp(TILE_MIN * spacing, TILE_MAX * spacing);
+        let useful = grid.len() >= 4 && side.is_finite() && side >= 2.0 * st;
         Tiled {
             grid,
             side: useful.then_some(side),
