@@ -4,14 +4,21 @@
 //! pixel of `assets/rocket.png` (resized to 1024 × 1024) containing the site.
 //!
 //! Run: `cargo bench --bench render -- --warm-up-time 1 --measurement-time 3`
+//!
+//! Instruction counts (stable on a loaded machine): `QCS_ONCE=<workload>` runs one workload a
+//! fixed number of times instead of criterion, e.g.
+//! `QCS_ONCE=gouraud:65536 valgrind --tool=callgrind --toggle-collect='*render_with*' target/release/deps/render-*`
+//! (workloads: `gouraud:N`, `shepard:N`, `natural:N`, `raster:N`).
 
 use std::hint::black_box;
 use std::io::Cursor;
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use image::codecs::jpeg::JpegEncoder;
 use image::{imageops::FilterType, ImageEncoder, RgbImage};
-use qcs::reconstruction::{Grid, Method, RenderOptions, SampleSet, Triangulation, Vertex};
+use qcs::reconstruction::{
+    rasterise, triangles, Grid, Method, RenderOptions, SampleSet, Triangulation, Vertex,
+};
 use spade::{Point2, Triangulation as _};
 
 const SIDE: u32 = 1024;
@@ -122,6 +129,13 @@ fn bench(c: &mut Criterion) {
         let mut set = sample_set(&img, &sites);
         let _ = set.triangulation();
         let _ = set.render_with(Method::Shepard, 8, 8, single); // builds the grid
+        let tris = {
+            let cols = set.colours().to_vec();
+            triangles(set.triangulation(), &cols, 3, [1.0, 1.0])
+        };
+        ras.bench_function(BenchmarkId::new("raster_only", n), |b| {
+            b.iter(|| black_box(rasterise(&tris, SIDE, SIDE, 3)))
+        });
         ras.bench_function(BenchmarkId::new("gouraud", n), |b| {
             b.iter(|| black_box(set.render_with(Method::Gouraud, SIDE, SIDE, single)))
         });
@@ -155,5 +169,44 @@ fn bench(c: &mut Criterion) {
     dec.finish();
 }
 
+/// `QCS_ONCE=method:count`: render that workload 5 times (for instruction counting).
+fn once(spec: &str) {
+    let (name, n) = spec.split_once(':').expect("QCS_ONCE=method:count");
+    let n: usize = n.parse().expect("count");
+    let img = photo();
+    let sites = jittered(n);
+    let mut set = sample_set(&img, &sites);
+    let _ = set.triangulation();
+    let single = RenderOptions::single_threaded();
+    let method = match name {
+        "gouraud" => Method::Gouraud,
+        "shepard" => Method::Shepard,
+        "natural" => Method::Natural,
+        "raster" => {
+            let tris = {
+                let cols = set.colours().to_vec();
+                triangles(set.triangulation(), &cols, 3, [1.0, 1.0])
+            };
+            for _ in 0..5 {
+                black_box(rasterise(&tris, SIDE, SIDE, 3));
+            }
+            return;
+        }
+        other => panic!("unknown workload {other}"),
+    };
+    let _ = set.render_with(method, 8, 8, single); // builds the grid outside the count
+    for _ in 0..5 {
+        black_box(set.render_with(method, SIDE, SIDE, single));
+    }
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);
+
+fn main() {
+    if let Ok(spec) = std::env::var("QCS_ONCE") {
+        once(&spec);
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -382,13 +382,7 @@ impl SampleSet {
                     Some(g) => g,
                     None => return vec![128; w * h * c],
                 };
-                let colours = frame.colours;
-                per_pixel(
-                    &frame,
-                    options.parallel,
-                    || (),
-                    |_, q| shepard::colour_at(grid, colours, c, q),
-                )
+                shepard::render(grid, &frame, options.parallel)
             }
         }
     }

@@ -54,6 +54,8 @@ struct Edge {
     tie: bool,
     /// dx / dy along the line.
     slope: f64,
+    /// The part of the crossing's rounding bound that does not depend on the row.
+    m0: f64,
     side: Side,
 }
 
@@ -87,6 +89,7 @@ impl Edge {
             flip,
             tie,
             slope,
+            m0: 64.0 * f64::EPSILON * (1.0 + c[0].abs() + d[0].abs()),
             side,
         }
     }
@@ -104,8 +107,33 @@ impl Edge {
     fn crossing(&self, py: f64) -> (f64, f64) {
         let t = (py - self.ay) * self.slope;
         let x = self.ax + t;
-        let m = 64.0 * f64::EPSILON * (1.0 + self.ax.abs() + self.bx.abs() + x.abs() + t.abs());
+        let m = self.m0 + 64.0 * f64::EPSILON * (x.abs() + t.abs());
         (x, m)
+    }
+}
+
+/// `⌈u⌉`, clamped to ±10^15 (NaN → 0), without a libm call (baseline
+/// x86-64 has no rounding instruction).
+#[inline]
+fn ceil_i64(u: f64) -> i64 {
+    let u = u.clamp(-1e15, 1e15);
+    let t = u as i64;
+    if (t as f64) < u {
+        t + 1
+    } else {
+        t
+    }
+}
+
+/// `⌊u⌋`, clamped to ±10^15 (NaN → 0).
+#[inline]
+fn floor_i64(u: f64) -> i64 {
+    let u = u.clamp(-1e15, 1e15);
+    let t = u as i64;
+    if (t as f64) > u {
+        t - 1
+    } else {
+        t
     }
 }
 
@@ -123,7 +151,8 @@ pub(crate) struct Setup {
 }
 
 impl Setup {
-    /// Prepares `t`; `None` for degenerate (zero-area or non-finite) triangles.
+    /// Prepares `t`; `None` for degenerate (zero-area or non-finite) triangles and for those
+    /// whose bounding box holds no pixel centre.
     pub(crate) fn new(t: &RasterTriangle) -> Option<Setup> {
         let [p0, mut p1, mut p2] = [t[0], t[1], t[2]];
         let area = |p1: &RasterVertex, p2: &RasterVertex| {
@@ -138,30 +167,42 @@ impl Setup {
             std::mem::swap(&mut p1, &mut p2);
             det = -det;
         }
+        let ymin = p0.pos[1].min(p1.pos[1]).min(p2.pos[1]);
+        let ymax = p0.pos[1].max(p1.pos[1]).max(p2.pos[1]);
+        // Row j is sampled at j + 0.5. Rows whose centre line is farther than a rounding margin
+        // outside [ymin, ymax] cannot hold an inside centre; the margin (far larger than any
+        // rounding of the side tests) keeps apex rows that rounding could decide either way.
+        let my = 1e-7 * (1.0 + ymin.abs().max(ymax.abs()));
+        let rows = (ceil_i64(ymin - 0.5 - my), floor_i64(ymax - 0.5 + my));
+        if rows.0 > rows.1 {
+            return None;
+        }
+        // Likewise columns: most triangles of a downscaled render hold no pixel centre at all
+        // and are dropped here, before their edges and colour plane are set up.
+        let xmin = p0.pos[0].min(p1.pos[0]).min(p2.pos[0]);
+        let xmax = p0.pos[0].max(p1.pos[0]).max(p2.pos[0]);
+        let mx = 1e-7 * (1.0 + xmin.abs().max(xmax.abs()));
+        if ceil_i64(xmin - 0.5 - mx) > floor_i64(xmax - 0.5 + mx) {
+            return None;
+        }
         let edges = [
             Edge::new(p0.pos, p1.pos),
             Edge::new(p1.pos, p2.pos),
             Edge::new(p2.pos, p0.pos),
         ];
-        let ymin = p0.pos[1].min(p1.pos[1]).min(p2.pos[1]);
-        let ymax = p0.pos[1].max(p1.pos[1]).max(p2.pos[1]);
-        // Row j is sampled at j + 0.5; the margin of one row absorbs rounding at the apexes.
-        let rows = (
-            (ymin - 0.5).ceil() as i64 - 1,
-            (ymax - 0.5).floor() as i64 + 1,
-        );
         let (d1x, d1y) = (p1.pos[0] - p0.pos[0], p1.pos[1] - p0.pos[1]);
         let (d2x, d2y) = (p2.pos[0] - p0.pos[0], p2.pos[1] - p0.pos[1]);
         let mut c0 = [0.0; 4];
         let mut gx = [0.0; 4];
         let mut gy = [0.0; 4];
+        let inv = 1.0 / det;
         for k in 0..4 {
             let a = p0.colour[k] as f64;
             let e1 = p1.colour[k] as f64 - a;
             let e2 = p2.colour[k] as f64 - a;
             c0[k] = a;
-            gx[k] = (e1 * d2y - e2 * d1y) / det;
-            gy[k] = (e2 * d1x - e1 * d2x) / det;
+            gx[k] = (e1 * d2y - e2 * d1y) * inv;
+            gy[k] = (e2 * d1x - e1 * d2x) * inv;
         }
         Some(Setup {
             edges,
@@ -190,8 +231,7 @@ impl Setup {
                 Side::Left => {
                     // First index whose centre is at or right of the line.
                     let (x, m) = e.crossing(py);
-                    let tf = (x - 0.5).ceil();
-                    let mut t = tf.clamp(-1.0, width as f64 + 1.0) as i64;
+                    let mut t = ceil_i64((x - 0.5).clamp(-1.0, width as f64 + 1.0));
                     if t >= 0 && t <= width {
                         let c = t as f64 + 0.5;
                         if c - x < m || x - (c - 1.0) < m {
@@ -208,8 +248,8 @@ impl Setup {
                 Side::Right => {
                     // One past the last index whose centre is at or left of the line.
                     let (x, m) = e.crossing(py);
-                    let tf = (x - 0.5).floor() + 1.0;
-                    let mut t = tf.clamp(-1.0, width as f64 + 1.0) as i64;
+                    let mut t =
+                        (floor_i64((x - 0.5).clamp(-2.0, width as f64 + 1.0)) + 1).min(width + 1);
                     if t >= 0 && t <= width {
                         let c = t as f64 + 0.5;
                         if c - x < m || x - (c - 1.0) < m {
@@ -284,9 +324,7 @@ fn paint_c<const C: usize>(setups: &mut dyn Iterator<Item = &Setup>, band: &mut 
                     v[k] += g[k];
                 }
             }
-            for f in &mut band.painted[base + i0 as usize..base + i1 as usize] {
-                *f = true;
-            }
+            band.painted[base + i0 as usize..base + i1 as usize].fill(true);
         }
     }
 }

@@ -233,17 +233,174 @@ impl Grid {
     }
 }
 
-/// Shepard colour (first `channels` channels) at `q` from its 4 nearest samples.
+/// Tile side bounds (source pixels) relative to the mean sample spacing: small tiles scan fewer
+/// candidates per point, large ones gather candidates for more points at once.
+const TILE_MIN: f64 = 0.35;
+const TILE_MAX: f64 = 1.0;
+/// Preferred tile side in query steps (about this many points per tile side).
+const TILE_STEPS: f64 = 8.0;
+
+/// One tile's candidate samples: every sample that can be among the 4 nearest of a point of
+/// the tile, sorted by distance to the tile centre.
+#[derive(Clone, Debug, Default)]
+struct Tile {
+    /// Generation that filled it (the tile row it belongs to).
+    gen: u64,
+    cx: f64,
+    cy: f64,
+    /// `(distance to centre, x, y, id)`, nearest first.
+    cands: Vec<(f64, f64, f64, u32)>,
+}
+
+/// Exact 4-nearest queries for points visited row by row (as [`super::per_pixel`] does), sharing
+/// work between nearby points: the plane is cut into square tiles, and the candidates of the
+/// tile row being visited are gathered once from the [`Grid`].
+///
+/// The answer is exactly [`Grid::nearest`]'s (same distances, same index tie-break): a sample
+/// in the 4 nearest of a point `p` of a tile with centre `c` and half-diagonal `r` is within
+/// `D4(p) + r ≤ D4(c) + 2r` of `c`, and while scanning candidates by distance to `c`, one at
+/// `key` is at least `key − |p − c|` from `p`.
+pub(crate) struct Tiled<'a> {
+    grid: &'a Grid,
+    /// Tile side in source pixels; `None`: plain per-point queries (tiles would hold < 2 points).
+    side: Option<f64>,
+    row: i64,
+    gen: u64,
+    tiles: Vec<Tile>,
+}
+
+impl<'a> Tiled<'a> {
+    /// Queries on `grid` at points spaced about `step` source pixels apart.
+    pub(crate) fn new(grid: &'a Grid, step: [f64; 2]) -> Self {
+        let spacing = grid.cs / PER_CELL.sqrt();
+        let st = step[0].max(step[1]);
+        let side = (TILE_STEPS * st).clamp(TILE_MIN * spacing, TILE_MAX * spacing);
+        let useful = grid.len() >= 4 && side.is_finite() && side >= 2.0 * st;
+        Tiled {
+            grid,
+            side: useful.then_some(side),
+            row: i64::MIN,
+            gen: 0,
+            tiles: Vec::new(),
+        }
+    }
+
+    /// The 4 nearest samples of `q`.
+    pub(crate) fn nearest(&mut self, q: Point) -> Nearest<4> {
+        let Some(side) = self.side else {
+            return self.grid.nearest::<4>(q);
+        };
+        let g = self.grid;
+        let (fx, fy) = ((q[0] - g.x0) / side, (q[1] - g.y0) / side);
+        // Far outside the samples' box, or non-finite: no sharing.
+        let lim = 1e9;
+        if !(fx.abs() < lim && fy.abs() < lim) {
+            return g.nearest::<4>(q);
+        }
+        // ⌊·⌋ without a libm call (|f| < 1e9).
+        let floor = |f: f64| {
+            let t = f as i64;
+            t - i64::from((t as f64) > f)
+        };
+        let (tx, ty) = (floor(fx), floor(fy));
+        if ty != self.row {
+            self.row = ty;
+            self.gen += 1;
+        }
+        let col = tx.rem_euclid(4096) as usize;
+        if self.tiles.len() <= col {
+            self.tiles.resize_with(col + 1, Tile::default);
+        }
+        let gen = self.gen;
+        let tile = &mut self.tiles[col];
+        let cx = g.x0 + (tx as f64 + 0.5) * side;
+        let cy = g.y0 + (ty as f64 + 0.5) * side;
+        if tile.gen != gen || tile.cx != cx || tile.cy != cy {
+            tile.gen = gen;
+            tile.cx = cx;
+            tile.cy = cy;
+            g.gather(cx, cy, side, &mut tile.cands);
+        }
+        let rp = ((q[0] - cx) * (q[0] - cx) + (q[1] - cy) * (q[1] - cy)).sqrt();
+        let mut best = Nearest::<4>::new();
+        for &(key, x, y, id) in &tile.cands {
+            if best.len >= 4 {
+                let lb = key - rp - 1e-9 * (1.0 + key);
+                if lb > 0.0 && lb * lb > best.d2[3] {
+                    break;
+                }
+            }
+            let dx = x - q[0];
+            let dy = y - q[1];
+            best.offer(dx * dx + dy * dy, id);
+        }
+        best
+    }
+}
+
+impl Grid {
+    /// Every sample that can be among the 4 nearest of a point of the square tile of side `side`
+    /// centred on `(cx, cy)`, as `(distance to centre, x, y, id)` sorted by distance.
+    fn gather(&self, cx: f64, cy: f64, side: f64, out: &mut Vec<(f64, f64, f64, u32)>) {
+        out.clear();
+        let c4 = self.nearest::<4>([cx, cy]);
+        let r = side * std::f64::consts::FRAC_1_SQRT_2;
+        let reach = (c4.d2[3].sqrt() + 2.0 * r) * (1.0 + 1e-9) + 1e-9;
+        let cell = |v: f64, o: f64, n: usize| {
+            let f = ((v - o) * self.inv_cs).clamp(0.0, (n - 1) as f64);
+            f as usize
+        };
+        let (lx, hx) = (
+            cell(cx - reach, self.x0, self.nx),
+            cell(cx + reach, self.x0, self.nx),
+        );
+        let (ly, hy) = (
+            cell(cy - reach, self.y0, self.ny),
+            cell(cy + reach, self.y0, self.ny),
+        );
+        let reach2 = reach * reach;
+        for yy in ly..=hy {
+            let a = self.start[yy * self.nx + lx] as usize;
+            let b = self.start[yy * self.nx + hx + 1] as usize;
+            for k in a..b {
+                let (dx, dy) = (self.xs[k] - cx, self.ys[k] - cy);
+                let d2 = dx * dx + dy * dy;
+                if d2 <= reach2 {
+                    out.push((d2.sqrt(), self.xs[k], self.ys[k], self.ids[k]));
+                }
+            }
+        }
+        out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+    }
+}
+
+/// Shepard colour from the 4 nearest samples `nb` (first `channels` channels).
 #[inline]
-pub(crate) fn colour_at(grid: &Grid, colours: &[u8], channels: usize, q: Point) -> [f32; 4] {
-    let nb = grid.nearest::<4>(q);
+pub(crate) fn colour_from(nb: &Nearest<4>, colours: &[u8], channels: usize) -> [f32; 4] {
+    match channels {
+        1 => colour_c::<1>(nb, colours),
+        2 => colour_c::<2>(nb, colours),
+        3 => colour_c::<3>(nb, colours),
+        _ => colour_c::<4>(nb, colours),
+    }
+}
+
+#[inline]
+fn colour_c<const C: usize>(nb: &Nearest<4>, colours: &[u8]) -> [f32; 4] {
     let mut out = [0f32; 4];
     if nb.len == 0 {
         return [128.0; 4];
     }
-    let col = |id: u32| {
-        let o = id as usize * channels;
-        colours.get(o..o + channels).unwrap_or(&[])
+    let col = |id: u32| -> [u8; C] {
+        let o = id as usize * C;
+        match colours.get(o..o + C) {
+            Some(s) => {
+                let mut c = [0u8; C];
+                c.copy_from_slice(s);
+                c
+            }
+            None => [0u8; C],
+        }
     };
     if nb.d2[0] == 0.0 {
         for (k, v) in col(nb.id[0]).iter().enumerate() {
@@ -251,17 +408,81 @@ pub(crate) fn colour_at(grid: &Grid, colours: &[u8], channels: usize, q: Point) 
         }
         return out;
     }
-    let mut acc = [0f64; 4];
+    let mut acc = [0f64; C];
     let mut wsum = 0f64;
-    for k in 0..nb.len {
+    for k in 0..nb.len.min(4) {
         let w = 1.0 / nb.d2[k];
         wsum += w;
-        for (c, v) in col(nb.id[k]).iter().enumerate() {
-            acc[c] += w * *v as f64;
+        let cc = col(nb.id[k]);
+        for c in 0..C {
+            acc[c] += w * cc[c] as f64;
         }
     }
-    for c in 0..channels.min(4) {
-        out[c] = (acc[c] / wsum) as f32;
+    let inv = 1.0 / wsum;
+    for c in 0..C {
+        out[c] = (acc[c] * inv) as f32;
     }
     out
+}
+
+/// Renders by Shepard interpolation over `grid` into `frame`'s output.
+pub(crate) fn render(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
+    let (colours, c) = (frame.colours, frame.channels);
+    super::per_pixel(
+        frame,
+        parallel,
+        || Tiled::new(grid, [frame.sx, frame.sy]),
+        |t, q| colour_from(&t.nearest(q), colours, c),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rng(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// Tiled queries give exactly the per-point grid answer, at several query spacings,
+    /// including a lattice (many exact ties) and points outside the samples' box.
+    #[test]
+    fn tiled_equals_per_point() {
+        let mut r = rng(11);
+        let mut sets: Vec<Vec<Point>> = vec![];
+        sets.push((0..3000).map(|_| [r() * 200.0, r() * 100.0]).collect());
+        sets.push(
+            (0..40)
+                .flat_map(|j| (0..40).map(move |i| [i as f64 * 2.0 + 1.0, j as f64 * 2.0 + 1.0]))
+                .collect(),
+        );
+        sets.push((0..7).map(|_| [r() * 50.0, r() * 50.0]).collect());
+        for pts in &sets {
+            let grid = Grid::new(pts);
+            for step in [0.05, 0.25, 0.5, 1.0, 3.0] {
+                let mut t = Tiled::new(&grid, [step, step]);
+                let mut y = -5.0;
+                while y < 110.0 {
+                    let mut x = -7.0;
+                    while x < 210.0 {
+                        let a = t.nearest([x, y]);
+                        let b = grid.nearest::<4>([x, y]);
+                        assert_eq!(
+                            (a.d2, a.id, a.len),
+                            (b.d2, b.id, b.len),
+                            "({x}, {y}) step {step}"
+                        );
+                        x += step * 7.3;
+                    }
+                    y += step * 5.1;
+                }
+            }
+        }
+    }
 }
