@@ -6,7 +6,7 @@ use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
 };
 use crate::reconstruction::{Method, SampleSet};
-use crate::sites::{Frame, Quasicrystal, Site};
+use crate::sites::{Frame, FrameError, Quasicrystal, Site};
 use crate::{Error, Limits, Result};
 use image::DynamicImage;
 
@@ -87,6 +87,9 @@ pub struct StreamDecoder {
     set: Option<SampleSet>,
     stopped: Option<FormatError>,
     metadata: Vec<Metadata>,
+    /// Set when `push` returned an error: the events after it were not applied, so the state
+    /// no longer follows the parser and every further `push` must fail.
+    failed: bool,
 }
 
 impl StreamDecoder {
@@ -113,6 +116,7 @@ impl StreamDecoder {
             set: None,
             stopped: None,
             metadata: Vec::new(),
+            failed: false,
         }
     }
 
@@ -121,13 +125,23 @@ impl StreamDecoder {
     /// Running out of bytes is never an error. A damaged file is an error (the decoder is
     /// then poisoned), unless recovery was asked for.
     pub fn push(&mut self, bytes: &[u8]) -> Result<()> {
+        if self.failed {
+            return Err(Error::Parameter(
+                "qcs stream decoder used after an error".into(),
+            ));
+        }
         self.events.clear();
         let r = self.parser.push(bytes, &mut self.events);
         let events = std::mem::take(&mut self.events);
-        for e in &events {
-            self.apply(e)?;
-        }
+        let applied = events.iter().try_for_each(|e| self.apply(e));
         self.events = events;
+        // An error from `apply` (e.g. a header the site construction cannot use) leaves the
+        // parser ahead of this decoder: poison it, or the next push would see levels without
+        // a header.
+        let r = applied.and(r);
+        if r.is_err() {
+            self.failed = true;
+        }
         r
     }
 
@@ -141,8 +155,31 @@ impl StreamDecoder {
                     },
                     None => Frame::default_for(h.width, h.height),
                 };
-                let seq = Quasicrystal::with_frame(h.width, h.height, frame)
-                    .map_err(|e| Error::Parameter(format!("unusable site frame: {e}")))?;
+                // spec/sites.md §2 bounds the frame (1 ≤ W, H ≤ 65535, 1 px ≤ root ≤ 256 px): a
+                // header outside them is malformed, not a bad caller parameter.
+                let seq = Quasicrystal::with_frame(h.width, h.height, frame).map_err(|e| {
+                    let leb = |v: u32| (32 - v.leading_zeros()).div_ceil(7).max(1) as u64;
+                    let (field, offset, value, expected) = match (e, h.lattice) {
+                        (FrameError::RootLength(r), Some(l)) => {
+                            // The root length is followed by the two origin varints and the CRC.
+                            let zz = |v: i32| ((v << 1) ^ (v >> 31)) as u32;
+                            let len = h.encode().map_or(0, |b| b.len() as u64);
+                            let tail = 4 + leb(zz(l.origin_x)) + leb(zz(l.origin_y)) + leb(r);
+                            let offset = len.saturating_sub(tail);
+                            ("lattice root length", offset, r as u64, "65536..=16777216")
+                        }
+                        (FrameError::Size(..), _) if h.width > 65535 => {
+                            ("width", 5, h.width as u64, "≤ 65535")
+                        }
+                        _ => ("height", 5 + leb(h.width), h.height as u64, "≤ 65535"),
+                    };
+                    Error::Format(FormatError::InvalidField {
+                        field,
+                        offset,
+                        value,
+                        expected,
+                    })
+                })?;
                 if h.total_samples > h.width as u64 * h.height as u64 {
                     return Err(Error::Format(FormatError::TooManySamples {
                         samples: h.total_samples,
@@ -278,12 +315,7 @@ impl StreamDecoder {
     /// Before the header is complete this is [`Error::NeedMoreData`].
     pub fn render(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
-        self.limits.check_output(width as u64, height as u64)?;
-        if width == 0 || height == 0 {
-            return Err(Error::Parameter(format!(
-                "output size {width}×{height} is empty"
-            )));
-        }
+        self.check_output_size(width, height)?;
         let n = self.sample_count();
         let c = self.channels();
         let mut set = self
@@ -311,6 +343,24 @@ impl StreamDecoder {
         })
     }
 
+    /// Checks a requested output size before anything is allocated: the limits, a non-empty
+    /// size, and a byte count (`width × height × channels`) that an allocation can hold.
+    fn check_output_size(&self, width: u32, height: u32) -> Result<()> {
+        self.limits.check_output(width as u64, height as u64)?;
+        if width == 0 || height == 0 {
+            return Err(Error::Parameter(format!(
+                "output size {width}×{height} is empty"
+            )));
+        }
+        let bytes = (width as u64 * height as u64).checked_mul(self.channels() as u64);
+        if !matches!(bytes, Some(b) if b <= isize::MAX as u64) {
+            return Err(Error::Parameter(format!(
+                "output size {width}×{height} does not fit in memory"
+            )));
+        }
+        Ok(())
+    }
+
     /// Renders from the first `k` available samples only (a fresh set, not the kept one).
     fn render_prefix(
         &mut self,
@@ -320,12 +370,7 @@ impl StreamDecoder {
         height: u32,
     ) -> Result<DecodedImage> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
-        self.limits.check_output(width as u64, height as u64)?;
-        if width == 0 || height == 0 {
-            return Err(Error::Parameter(format!(
-                "output size {width}×{height} is empty"
-            )));
-        }
+        self.check_output_size(width, height)?;
         let c = self.channels();
         let (sites, col) = self.samples(k);
         let used = sites.len() as u64;

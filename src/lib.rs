@@ -19,6 +19,8 @@ mod decoder;
 mod encoder;
 pub mod error;
 pub mod eval;
+#[doc(hidden)]
+pub mod fuzzing;
 mod integration;
 pub mod lattice;
 pub mod limits;

@@ -459,7 +459,9 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
     let params = qcs::coding::predictive::Params::from_quality(DEFAULT_QUALITY);
     let opts = EncodeOptions {
         samples: a.samples,
-        coding: Coding::Predictive { params: params.to_bytes() },
+        coding: Coding::Predictive {
+            params: params.to_bytes(),
+        },
         ..Default::default()
     };
     let bytes = qcs::encode(&img, &opts)?;

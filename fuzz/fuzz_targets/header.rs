@@ -1,0 +1,6 @@
+//! cargo-fuzz target `header`: see `qcs::fuzzing::header` for the input layout and the invariants.
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    let _ = qcs::fuzzing::header(data);
+});

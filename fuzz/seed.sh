@@ -1,0 +1,17 @@
+#!/bin/sh
+# Seeds corpus/<target>/ from the conformance vectors (spec/vectors/*.qcs), with the control bytes
+# each harness expects in front (see src/fuzzing.rs). The seeds are not committed.
+set -e
+cd "$(dirname "$0")"
+for t in decode push header roundtrip; do mkdir -p corpus/$t; done
+for f in ../spec/vectors/*.qcs; do
+    n=$(basename "$f" .qcs)
+    { printf '\040\030\000'; cat "$f"; } > corpus/decode/$n
+    { printf '\020\020\201'; cat "$f"; } > corpus/decode/$n-cap
+    { printf 'seed'; cat "$f"; } > corpus/push/$n
+    { printf '\001\002\003\004'; cat "$f"; } > corpus/push/$n-b
+    head -c 64 "$f" > corpus/header/$n
+done
+printf '\027\027\002\007\200\007\003\000 gradient pixels 0123456789' > corpus/roundtrip/rgb
+printf '\017\011\000\004\060\002\001\005\000\377\200\177' > corpus/roundtrip/grey-frame
+printf '\003\003\003\000\011\001\000\000' > corpus/roundtrip/rgba-constant

@@ -1,0 +1,438 @@
+//! Fuzz harness bodies, shared by the cargo-fuzz targets in `fuzz/` and by the replay test
+//! (`tests/robustness.rs`), so that a crash input found by the fuzzer is checked by plain
+//! `cargo test` through exactly the same code.
+//!
+//! Every function takes arbitrary bytes. It returns normally when the library behaved (an
+//! error result is fine: it is how a decoder rejects a bad file) and **panics** when an
+//! invariant of the library is broken: that panic is what the fuzzer reports. Limits are tight
+//! ([`limits`]) so that one input costs milliseconds.
+//!
+//! Not a stable API: hidden from the docs, may change with the fuzz targets.
+
+use crate::coding::raw::{self, RawDecoder};
+use crate::container::{self, Coding, Header, Layout, Parser, ParserOptions};
+use crate::sampling::{SampleColour, SourceImage};
+use crate::sites::{Frame, Quasicrystal};
+use crate::{DecodeOptions, EncodeOptions, Error, Limits, Method, StreamDecoder};
+
+/// The limits every harness decodes with: small images, few samples, little metadata.
+///
+/// ```
+/// assert!(qcs::fuzzing::limits().max_samples <= 1 << 16);
+/// ```
+pub fn limits() -> Limits {
+    Limits {
+        max_dimension: 4096,
+        max_image_pixels: 1 << 22,
+        max_output_pixels: 64 * 64,
+        max_samples: 1 << 16,
+        max_metadata_bytes: 1 << 12,
+    }
+}
+
+const METHODS: [Method; 3] = [Method::Gouraud, Method::Shepard, Method::Natural];
+
+/// A small deterministic generator (xorshift64*) driven by fuzzer bytes.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: &[u8]) -> Rng {
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        for &b in seed {
+            s = (s ^ b as u64).wrapping_mul(0x100_0000_01B3);
+        }
+        Rng(s | 1)
+    }
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n.max(1)
+    }
+}
+
+/// Splits `n` control bytes off the front of `data` (fewer if `data` is shorter).
+fn split(data: &[u8], n: usize) -> (&[u8], &[u8]) {
+    data.split_at(n.min(data.len()))
+}
+
+fn byte(ctl: &[u8], i: usize) -> u8 {
+    ctl.get(i).copied().unwrap_or(0)
+}
+
+/// Checks a decoded picture against what the header and the request imply.
+fn check_decoded(d: &crate::DecodedImage, header: &Header, w: u32, h: u32) {
+    assert_eq!((d.image.width(), d.image.height()), (w, h), "output size");
+    let channels = d.image.color().channel_count();
+    assert_eq!(channels, header.layout.channels(), "output layout");
+    assert!(d.samples_verified <= d.samples_used, "verified ≤ used");
+    assert!(d.samples_used <= header.total_samples, "used ≤ N");
+    assert!(d.levels_complete <= header.level_count(), "levels ≤ count");
+    if d.is_final {
+        assert_eq!(
+            d.samples_used, header.total_samples,
+            "final uses every sample"
+        );
+        assert_eq!(d.samples_verified, header.total_samples);
+    }
+}
+
+/// One-shot decode: control bytes `[w, h, flags]`, then the file.
+///
+/// Decodes at a fuzzer-chosen size (≤ 64×64) and method, with and without recovery, and checks:
+/// the picture has the size asked for and the header's layout; verified ≤ used ≤ N; recovery
+/// never fails where the strict decoder succeeds and agrees with it then; the header seen by
+/// the decoder is the one [`Header::parse`] reads; the counts match [`RawDecoder`]'s.
+///
+/// ```
+/// qcs::fuzzing::decode(b"\x10\x10\x00qcs\x01\x00\x02\x02\x01\x03\x02\x00\x01\x08");
+/// ```
+pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
+    let (ctl, file) = split(data, 3);
+    let w = 1 + (byte(ctl, 0) % 64) as u32;
+    let h = 1 + (byte(ctl, 1) % 64) as u32;
+    let flags = byte(ctl, 2);
+    let method = METHODS[(flags % 3) as usize];
+    let max_samples = (flags & 0x80 != 0).then_some((flags & 0x1F) as u64);
+    let opts = |recover| DecodeOptions {
+        method,
+        size: Some((w, h)),
+        max_samples,
+        max_bytes: None,
+        limits: limits(),
+        recover,
+    };
+    let strict = crate::decode(file, &opts(false));
+    let recovered = crate::decode(file, &opts(true));
+
+    let mut raw = RawDecoder::new(ParserOptions::with_limits(limits()));
+    let raw_result = raw.push(file);
+
+    match (&strict, &recovered) {
+        (Ok(a), Ok(b)) => {
+            assert_eq!(
+                a.samples_used, b.samples_used,
+                "recovery changes a good decode"
+            );
+            assert_eq!(a.samples_verified, b.samples_verified);
+            assert_eq!(a.image, b.image, "recovery changes a good decode");
+        }
+        (Ok(_), Err(e)) => panic!("recovery fails where the strict decoder succeeds: {e}"),
+        (Err(Error::NeedMoreData), Ok(_)) => panic!("recovery decodes an incomplete header"),
+        _ => {}
+    }
+    if let Ok(d) = &strict {
+        let (header, _) = Header::parse(file).expect("a decoded file has a parsable header");
+        check_decoded(d, &header, w, h);
+        assert!(
+            raw_result.is_ok(),
+            "raw decoder fails where decode succeeds"
+        );
+        let limit = max_samples.unwrap_or(u64::MAX);
+        assert_eq!(d.samples_used, raw.samples_available().min(limit));
+        assert_eq!(
+            d.samples_verified,
+            raw.samples_verified().min(d.samples_used)
+        );
+    }
+    if let Ok(d) = &recovered {
+        let (header, _) = Header::parse(file).expect("a decoded file has a parsable header");
+        check_decoded(d, &header, w, h);
+    }
+    strict.ok()
+}
+
+/// The push decoder: control bytes `[seed × 4]`, then the file, fed in pseudo-random chunks
+/// (0..=64 bytes, sometimes one byte) with renders at random points and sizes (≤ 32×32).
+///
+/// Checks: a push error is final (the decoder stays poisoned); the counts never go down and
+/// match a one-shot [`crate::decode`] of the same bytes at the end; renders have the size asked
+/// for; the same file split differently gives the same result as one push.
+///
+/// ```
+/// qcs::fuzzing::push(b"seed");
+/// ```
+pub fn push(data: &[u8]) {
+    let (ctl, file) = split(data, 4);
+    let mut rng = Rng::new(ctl);
+    let recover = rng.below(4) == 0;
+    let opts = ParserOptions::with_limits(limits()).recover(recover);
+    let mut dec = StreamDecoder::with_options(opts.clone());
+    let mut pos = 0;
+    let mut failed = false;
+    let (mut last_avail, mut last_verified) = (0, 0);
+    while pos < file.len() {
+        let n = match rng.below(8) {
+            0 => 0,
+            1 => 1,
+            _ => 1 + rng.below(64) as usize,
+        };
+        let end = (pos + n).min(file.len());
+        let r = dec.push(&file[pos..end]);
+        pos = end;
+        if failed {
+            assert!(r.is_err(), "push succeeds after an error");
+            continue;
+        }
+        if r.is_err() {
+            failed = true;
+            assert!(
+                dec.push(&[]).is_err(),
+                "decoder not poisoned after an error"
+            );
+            continue;
+        }
+        assert!(dec.samples_available() >= last_avail, "available went down");
+        assert!(
+            dec.samples_verified() >= last_verified,
+            "verified went down"
+        );
+        assert!(dec.samples_verified() <= dec.samples_available());
+        last_avail = dec.samples_available();
+        last_verified = dec.samples_verified();
+        if rng.below(4) == 0 {
+            let w = 1 + rng.below(32) as u32;
+            let h = 1 + rng.below(32) as u32;
+            let method = METHODS[rng.below(3) as usize];
+            match dec.render(method, w, h) {
+                Ok(p) => {
+                    let header = dec.header().cloned().expect("render implies a header");
+                    check_decoded(p.decoded(), &header, w, h);
+                    assert_eq!(p.decoded().samples_used, dec.samples_available());
+                    assert_eq!(p.is_final(), dec.is_complete());
+                }
+                Err(Error::NeedMoreData) => assert!(dec.header().is_none()),
+                Err(e) => panic!("render failed after a good push: {e}"),
+            }
+        }
+    }
+    // Split invariance: one push of everything gives the same state.
+    let mut whole = StreamDecoder::with_options(opts);
+    let r = whole.push(file);
+    assert_eq!(
+        r.is_err(),
+        failed,
+        "error depends on how the bytes are split"
+    );
+    if !failed {
+        assert_eq!(whole.samples_available(), dec.samples_available());
+        assert_eq!(whole.samples_verified(), dec.samples_verified());
+        assert_eq!(whole.levels_complete(), dec.levels_complete());
+        assert_eq!(whole.header(), dec.header());
+        assert_eq!(whole.metadata(), dec.metadata());
+        assert_eq!(whole.stopped(), dec.stopped());
+        if whole.header().is_some() {
+            let a = whole.render(Method::Shepard, 8, 8).map(|p| p.into_image());
+            let b = dec.render(Method::Shepard, 8, 8).map(|p| p.into_image());
+            match (a, b) {
+                (Ok(a), Ok(b)) => assert_eq!(a, b, "split changes the picture"),
+                (a, b) => panic!("render after a good push: {:?} / {:?}", a.err(), b.err()),
+            }
+        }
+    }
+}
+
+/// The header parser on arbitrary bytes: a parsed header re-encodes to the same bytes (the
+/// encoding is unique), its level schedule is consistent, and the push [`Parser`] fed one byte at
+/// a time agrees with [`Header::parse`]. Also runs [`container::inspect`].
+///
+/// ```
+/// qcs::fuzzing::header(b"qcs\x01\x00\x02\x02\x01\x03\x02\x00\x01\x08\x6e\xcc\x57\x5b");
+/// ```
+pub fn header(data: &[u8]) {
+    let parsed = Header::parse(data);
+    if let Ok((h, len)) = &parsed {
+        let len = *len;
+        // 16 bytes only with the predictive coding and no parameter bytes; raw needs 17.
+        let min = if h.coding == (Coding::Predictive { params: vec![] }) {
+            16
+        } else {
+            17
+        };
+        assert!(
+            (min..=container::MAX_HEADER_LEN).contains(&len),
+            "header length {len}"
+        );
+        let bytes = h.encode().expect("a parsed header encodes");
+        // The CRC is not checked under cfg(fuzzing); everything before it must match.
+        assert_eq!(bytes.len(), len, "re-encoded length");
+        assert_eq!(&bytes[..len - 4], &data[..len - 4], "re-encoding differs");
+        assert_eq!(Header::parse(&bytes).ok(), Some((h.clone(), len)));
+        let levels = h.level_count();
+        assert!((1..=65).contains(&levels), "{levels} levels");
+        let mut next = 0;
+        for k in 0..levels {
+            let r = h.level_range(k).expect("level below level_count");
+            assert_eq!(r.start, next, "levels are contiguous");
+            assert!(r.end > r.start);
+            if k > 0 {
+                assert!(
+                    r.end - r.start <= r.start,
+                    "a level at most doubles the count"
+                );
+            }
+            next = r.end;
+            if let Coding::Raw { bits } = h.coding {
+                let len = h.level_payload_len(k).expect("raw fixes payload lengths");
+                assert!(len <= u32::MAX as u64);
+                let c = h.layout.channels() as u64;
+                assert_eq!(len, ((r.end - r.start) * c * bits as u64).div_ceil(8));
+            }
+        }
+        assert_eq!(next, h.total_samples, "levels cover N");
+        assert!(h.level_range(levels).is_none());
+    }
+    // The push parser, byte by byte, with no limits, sees the same header.
+    let mut p = Parser::new(ParserOptions::with_limits(Limits::none()));
+    let mut events = Vec::new();
+    let mut result = Ok(());
+    for b in data.iter().take(container::MAX_HEADER_LEN + 1) {
+        result = p.push(std::slice::from_ref(b), &mut events);
+        if result.is_err() || p.header().is_some() {
+            break;
+        }
+    }
+    match &parsed {
+        // Limits::none() still bounds dimensions to the site construction's 65535.
+        Ok(_) if matches!(result, Err(Error::Limits(_))) => assert!(h_too_big(&parsed)),
+        Ok((h, _)) => assert_eq!(p.header(), Some(h), "push parser disagrees"),
+        Err(container::FormatError::TruncatedHeader { .. }) => {
+            assert!(result.is_ok() && p.header().is_none())
+        }
+        Err(e) => match &result {
+            Err(Error::Format(f)) => assert_eq!(f, e, "push parser reports another error"),
+            other => panic!("push parser: {other:?}, Header::parse: {e}"),
+        },
+    }
+    let _ = container::inspect(data);
+}
+
+fn h_too_big(parsed: &Result<(Header, usize), container::FormatError>) -> bool {
+    parsed
+        .as_ref()
+        .is_ok_and(|(h, _)| h.width.max(h.height) > u16::MAX as u32)
+}
+
+/// A round trip: control bytes `[w, h, layout, bits, n, first level, colour rule, frame]`, then
+/// pixels (cycled). Encodes the small image, decodes it and checks exactly what must hold: the
+/// decode is final with N samples; every sample colour is the encoder's sample colour quantised
+/// to B bits and back; a constant image decodes to its (quantised) constant everywhere, by every
+/// method; and a prefix cut anywhere after the header decodes to a picture.
+///
+/// ```
+/// qcs::fuzzing::roundtrip(b"\x07\x05\x02\x04\x30\x03\x00\x00pixels");
+/// ```
+pub fn roundtrip(data: &[u8]) {
+    let (ctl, px) = split(data, 8);
+    let w = 1 + (byte(ctl, 0) % 24) as u32;
+    let h = 1 + (byte(ctl, 1) % 24) as u32;
+    let layout = Layout::from_channels(1 + byte(ctl, 2) % 4).unwrap_or(Layout::Grey);
+    let bits = 1 + byte(ctl, 3) % 8;
+    let area = w as u64 * h as u64;
+    let n = 1 + byte(ctl, 4) as u64 % area;
+    let first = 1 + (byte(ctl, 5) % 16) as u64;
+    let colour = [
+        SampleColour::Nearest,
+        SampleColour::Bilinear,
+        SampleColour::Area,
+        SampleColour::Progressive,
+    ][(byte(ctl, 6) % 4) as usize];
+    let c = layout.channels() as usize;
+    let len = (w * h) as usize * c;
+    let pixels: Vec<u8> = if px.is_empty() {
+        vec![0; len]
+    } else {
+        px.iter().copied().cycle().take(len).collect()
+    };
+    let frame_byte = byte(ctl, 7);
+    let frame = (frame_byte != 0).then(|| {
+        let d = Frame::default_for(w, h);
+        Frame {
+            root_len: (1 << 16) + ((frame_byte & 0x0F) as u32) * (1 << 13),
+            origin: [d.origin[0] - (frame_byte as i32) * 977, d.origin[1]],
+        }
+    });
+    let image = to_image(layout, w, h, pixels.clone());
+    let opts = EncodeOptions {
+        samples: Some(n),
+        coding: Coding::Raw { bits },
+        colour,
+        first_level: first,
+        frame,
+        ..Default::default()
+    };
+    let file = crate::encode(&image, &opts).expect("encoding a small image");
+
+    // Independent expectation of the sample colours: the sampling rule at the sites, quantised.
+    let q = Quasicrystal::with_frame(w, h, frame.unwrap_or_else(|| Frame::default_for(w, h)))
+        .expect("frame within bounds");
+    let sites: Vec<_> = q.first(n as usize).into_iter().map(|s| s.pos).collect();
+    let source = SourceImage::new(&pixels, w, h, c);
+    let expected: Vec<u8> = source
+        .colours(&sites, colour, n as usize)
+        .iter()
+        .map(|&v| raw::dequantise(raw::quantise(v, bits), bits))
+        .collect();
+    let mut rd = RawDecoder::new(ParserOptions::with_limits(limits()));
+    rd.push(&file).expect("decoding what was encoded");
+    assert_eq!(rd.samples_verified(), n);
+    assert_eq!(rd.colours(), &expected[..], "sample colours");
+
+    let constant = pixels.chunks(c).all(|p| p == &pixels[..c]);
+    for method in METHODS {
+        let d = crate::decode(
+            &file,
+            &DecodeOptions {
+                method,
+                limits: limits(),
+                ..Default::default()
+            },
+        )
+        .expect("decoding what was encoded");
+        assert!(d.is_final && d.samples_used == n && d.samples_verified == n);
+        assert_eq!((d.image.width(), d.image.height()), (w, h));
+        if constant {
+            let want: Vec<u8> = pixels[..c]
+                .iter()
+                .map(|&v| raw::dequantise(raw::quantise(v, bits), bits))
+                .collect();
+            let got = d.image.as_bytes();
+            assert!(
+                got.chunks(c).all(|p| p == &want[..]),
+                "{method:?}: constant image {want:?} decodes to other colours"
+            );
+        }
+    }
+    // A prefix cut after the header is a picture; inside the header it is NeedMoreData.
+    let (_, header_len) = Header::parse(&file).expect("own header");
+    let cut = header_len + (byte(ctl, 4) as usize * 7 + px.len()) % (file.len() - header_len + 1);
+    let d = crate::decode(
+        &file[..cut],
+        &DecodeOptions {
+            size: Some((8, 8)),
+            limits: limits(),
+            ..Default::default()
+        },
+    )
+    .expect("a prefix after the header decodes");
+    assert!(d.samples_used <= n);
+    assert_eq!(d.is_final, cut == file.len());
+    assert!(matches!(
+        crate::decode(&file[..header_len - 1], &Default::default()),
+        Err(Error::NeedMoreData)
+    ));
+}
+
+fn to_image(layout: Layout, w: u32, h: u32, px: Vec<u8>) -> image::DynamicImage {
+    use image::DynamicImage as D;
+    let bad = "buffer of w×h×channels";
+    match layout {
+        Layout::Grey => D::ImageLuma8(image::GrayImage::from_raw(w, h, px).expect(bad)),
+        Layout::GreyAlpha => D::ImageLumaA8(image::GrayAlphaImage::from_raw(w, h, px).expect(bad)),
+        Layout::Rgb => D::ImageRgb8(image::RgbImage::from_raw(w, h, px).expect(bad)),
+        Layout::Rgba => D::ImageRgba8(image::RgbaImage::from_raw(w, h, px).expect(bad)),
+    }
+}

@@ -1,0 +1,580 @@
+//! Robustness: hostile header claims, every single-bit flip and every truncation of the
+//! conformance set (`spec/vectors/*.qcs`), recovery, and a replay of the fuzz regressions.
+//!
+//! The expectations here come from an independent walk of the chunk structure
+//! (spec/format.md §Chunks), not from the library's parser.
+
+use qcs::container::{ChunkRef, Coding, FormatError, Header, Layout, Parser, ParserOptions};
+use qcs::{DecodeOptions, Error, Limits, Method, StreamDecoder};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn vectors() -> Vec<(String, Vec<u8>)> {
+    let mut out: Vec<_> = std::fs::read_dir(root().join("spec/vectors"))
+        .expect("spec/vectors")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "qcs"))
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).expect("read vector"))
+        })
+        .collect();
+    out.sort();
+    assert!(out.len() >= 5, "the conformance set is missing");
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// An independent reading of the chunk structure.
+
+/// One chunk as laid out in the bytes: where its tag, payload and CRC are.
+#[derive(Clone, Debug)]
+struct Span {
+    chunk: ChunkRef,
+    payload: std::ops::Range<usize>,
+    /// One past its CRC.
+    end: usize,
+}
+
+fn leb128(bytes: &[u8], mut at: usize) -> (u64, usize) {
+    let (mut v, mut shift) = (0u64, 0);
+    loop {
+        let b = bytes[at];
+        v |= ((b & 0x7F) as u64) << shift;
+        at += 1;
+        shift += 7;
+        if b & 0x80 == 0 {
+            return (v, at);
+        }
+    }
+}
+
+fn chunks(file: &[u8], header_len: usize) -> Vec<Span> {
+    let mut out = Vec::new();
+    let mut at = header_len;
+    while at < file.len() {
+        let (len, p) = leb128(file, at + 1);
+        let end = p + len as usize + 4;
+        out.push(Span {
+            chunk: ChunkRef {
+                index: out.len() as u32,
+                tag: file[at],
+                offset: at as u64,
+            },
+            payload: p..p + len as usize,
+            end,
+        });
+        at = end;
+    }
+    assert_eq!(at, file.len(), "chunks tile the file");
+    out
+}
+
+/// Samples (verified, available) in a prefix of `cut` bytes, by spec/format.md §Truncation.
+fn expected_counts(h: &Header, spans: &[Span], cut: usize) -> (u64, u64) {
+    let Coding::Raw { bits } = h.coding else {
+        panic!("vectors are raw")
+    };
+    let sample_bits = h.layout.channels() as u64 * bits as u64;
+    let (mut verified, mut level) = (0, 0);
+    for s in spans.iter().filter(|s| s.chunk.tag == b'L') {
+        let range = h.level_range(level).expect("level");
+        level += 1;
+        if cut >= s.end {
+            verified = range.end;
+            continue;
+        }
+        let got = cut.saturating_sub(s.payload.start).min(s.payload.len()) as u64;
+        let complete = (got * 8 / sample_bits).min(range.end - range.start);
+        return (verified, verified + complete);
+    }
+    (verified, verified)
+}
+
+fn small(limits: Limits) -> DecodeOptions {
+    DecodeOptions {
+        size: Some((12, 10)),
+        method: Method::Shepard,
+        limits,
+        ..Default::default()
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Truncation and corruption of the conformance set.
+
+#[test]
+fn truncation_at_every_byte() {
+    for (name, file) in vectors() {
+        let (h, header_len) = Header::parse(&file).expect("vector header");
+        let spans = chunks(&file, header_len);
+        let mut stream = StreamDecoder::new(Limits::default());
+        for cut in 0..=file.len() {
+            let r = qcs::decode(&file[..cut], &small(Limits::default()));
+            if cut < header_len {
+                assert!(
+                    matches!(r, Err(Error::NeedMoreData)),
+                    "{name} @{cut}: {r:?}"
+                );
+            } else {
+                let d = r.unwrap_or_else(|e| panic!("{name} @{cut}: {e}"));
+                assert_eq!((d.image.width(), d.image.height()), (12, 10));
+                let (verified, available) = expected_counts(&h, &spans, cut);
+                assert_eq!(
+                    (d.samples_verified, d.samples_used),
+                    (verified, available),
+                    "{name} @{cut}"
+                );
+                assert_eq!(d.is_final, cut == file.len(), "{name} @{cut}");
+            }
+            // The push decoder, fed byte by byte, agrees with the one-shot decode.
+            if cut > 0 {
+                stream.push(&file[cut - 1..cut]).expect("push");
+            }
+            if cut >= header_len {
+                assert_eq!(
+                    (stream.samples_verified(), stream.samples_available()),
+                    expected_counts(&h, &spans, cut),
+                    "{name} stream @{cut}"
+                );
+            } else {
+                assert!(stream.header().is_none());
+                assert!(matches!(
+                    stream.render(Method::Gouraud, 4, 4),
+                    Err(Error::NeedMoreData)
+                ));
+            }
+        }
+        assert!(stream.is_complete());
+        assert!(stream
+            .render(Method::Gouraud, 5, 3)
+            .expect("render")
+            .is_final());
+    }
+}
+
+/// What a strict decode of a file with bit `bit` of byte `at` flipped may give.
+fn check_flip(name: &str, file: &[u8], header_len: usize, spans: &[Span], at: usize, bit: u8) {
+    let mut bad = file.to_vec();
+    bad[at] ^= 1 << bit;
+    let h = Header::parse(file).expect("header").0;
+    let ctx = format!("{name}: bit {bit} of byte {at}");
+    match qcs::decode(&bad, &small(Limits::default())) {
+        Ok(d) => {
+            // Undetected: only possible where the flip turns the file into a valid prefix of
+            // another file (e.g. a longer last metadata chunk); the picture is still whole.
+            assert_eq!((d.image.width(), d.image.height()), (12, 10), "{ctx}");
+            assert!(at >= header_len, "{ctx}: header flip undetected");
+        }
+        Err(Error::NeedMoreData) => {
+            // A flip that lengthens the header (a varint continuation, the params length):
+            // the file now ends inside a longer header.
+            assert!(at < header_len, "{ctx}");
+        }
+        Err(Error::Format(e)) if at < header_len => {
+            assert_eq!(e.chunk(), None, "{ctx}: {e}");
+        }
+        Err(Error::Format(e)) => {
+            let span = spans
+                .iter()
+                .find(|s| (s.chunk.offset as usize..s.end).contains(&at))
+                .expect("flip inside a chunk");
+            let chunk = e
+                .chunk()
+                .unwrap_or_else(|| panic!("{ctx}: {e} names no chunk"));
+            assert_eq!(chunk.offset, span.chunk.offset, "{ctx}: {e}");
+            assert_eq!(chunk.index, span.chunk.index, "{ctx}: {e}");
+            if at >= span.payload.start {
+                // Payload and CRC bytes are covered by the CRC only.
+                match e {
+                    FormatError::ChunkCrc { chunk, .. } | FormatError::BadText { chunk, .. } => {
+                        assert_eq!(chunk, span.chunk, "{ctx}")
+                    }
+                    other => panic!("{ctx}: {other}"),
+                }
+            }
+            // Recovery keeps exactly the levels before the damaged chunk.
+            let mut opts = small(Limits::default());
+            opts.recover = true;
+            let d = qcs::decode(&bad, &opts).unwrap_or_else(|e| panic!("{ctx}: recover: {e}"));
+            let (verified, _) = expected_counts(&h, spans, span.chunk.offset as usize);
+            assert_eq!(d.samples_verified, verified, "{ctx}");
+            assert_eq!(d.samples_used, verified, "{ctx}: unverified samples kept");
+            assert!(!d.is_final || span.chunk.tag != b'L', "{ctx}");
+        }
+        Err(other) => panic!("{ctx}: {other}"),
+    }
+}
+
+#[test]
+fn every_single_bit_flip_is_caught_or_harmless() {
+    for (name, file) in vectors() {
+        let (_, header_len) = Header::parse(&file).expect("vector header");
+        let spans = chunks(&file, header_len);
+        for at in 0..file.len() {
+            for bit in 0..8 {
+                check_flip(&name, &file, header_len, &spans, at, bit);
+            }
+        }
+    }
+}
+
+#[test]
+fn payload_flip_names_chunk_and_offset() {
+    let (_, file) = vectors().into_iter().next().expect("a vector");
+    let (h, header_len) = Header::parse(&file).expect("header");
+    let spans = chunks(&file, header_len);
+    let level1 = spans
+        .iter()
+        .filter(|s| s.chunk.tag == b'L')
+        .nth(1)
+        .expect("level 1");
+    let mut bad = file.clone();
+    bad[level1.payload.start] ^= 0x10;
+    let e = qcs::decode(&bad, &Default::default()).expect_err("CRC catches it");
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&format!(
+            "chunk #{} 'L' at byte {}",
+            level1.chunk.index, level1.chunk.offset
+        )) && msg.contains("CRC mismatch"),
+        "{msg}"
+    );
+    // Recovery: the longest verified prefix is level 0.
+    let d = qcs::decode(
+        &bad,
+        &DecodeOptions {
+            recover: true,
+            ..Default::default()
+        },
+    )
+    .expect("recovered");
+    assert_eq!(d.samples_verified, h.level_range(0).unwrap().end);
+    assert_eq!(d.samples_used, d.samples_verified);
+    assert_eq!(d.levels_complete, 1);
+    let mut s = StreamDecoder::with_options(ParserOptions::default().recover(true));
+    s.push(&bad).expect("recovering push");
+    assert!(
+        matches!(s.stopped(), Some(FormatError::ChunkCrc { chunk, .. }) if chunk == &level1.chunk)
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile header claims: errors at once, or cost that follows the bytes given.
+
+/// A header's bytes with its CRC, from fields the type cannot hold (hand-written varints).
+fn raw_header(fields: &[u8]) -> Vec<u8> {
+    let mut h = b"qcs\x01\x00".to_vec();
+    h.extend_from_slice(fields);
+    let crc = crc32fast::hash(&h);
+    h.extend_from_slice(&crc.to_le_bytes());
+    h
+}
+
+#[test]
+fn header_claiming_2_pow_32_pixels_a_side_is_a_format_error() {
+    // W = H = 2^32: the varint u32 overflows (5th byte 0x10).
+    let w = [0x80, 0x80, 0x80, 0x80, 0x10];
+    let mut f = w.to_vec();
+    f.extend_from_slice(&w);
+    f.extend_from_slice(&[3, 1, 1, 0, 1, 8]);
+    let bytes = raw_header(&f);
+    let e = qcs::decode(&bytes, &Default::default()).expect_err("rejected");
+    assert!(
+        matches!(
+            e,
+            Error::Format(FormatError::HeaderVarint {
+                field: "width",
+                offset: 5,
+                ..
+            })
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn header_claiming_huge_images_or_sample_counts_fails_at_once() {
+    // 2^32 − 1 square, 2^40 samples, raw: the last level's payload cannot fit a chunk.
+    let h = Header::new(
+        u32::MAX,
+        u32::MAX,
+        Layout::Grey,
+        1 << 40,
+        1,
+        Coding::Raw { bits: 1 },
+    );
+    assert!(h.validate().is_err());
+    // The same with the predictive coding is format-valid; the limits reject it.
+    let h = Header::new(
+        u32::MAX,
+        u32::MAX,
+        Layout::Rgb,
+        1 << 40,
+        1,
+        Coding::Predictive { params: vec![] },
+    );
+    let bytes = h.encode().expect("format-valid");
+    for limits in [Limits::default(), Limits::none()] {
+        let e = qcs::decode(&bytes, &small(limits)).expect_err("rejected");
+        assert!(matches!(e, Error::Limits(_)), "{e}");
+    }
+    // Within the default dimension limit but over the sample limit.
+    let h = Header::new(
+        30000,
+        30000,
+        Layout::Rgb,
+        1 << 28,
+        8,
+        Coding::Raw { bits: 8 },
+    );
+    let e = qcs::decode(&h.encode().unwrap(), &Default::default()).expect_err("rejected");
+    assert!(
+        matches!(e, Error::Limits(qcs::limits::LimitError::ImagePixels(..))),
+        "{e}"
+    );
+    // More samples than pixels.
+    let h = Header::new(10, 10, Layout::Grey, 101, 8, Coding::Raw { bits: 8 });
+    let e = qcs::decode(&h.encode().unwrap(), &Default::default()).expect_err("rejected");
+    assert!(
+        matches!(e, Error::Format(FormatError::TooManySamples { .. })),
+        "{e}"
+    );
+    // A frame the site construction cannot use (root length 0.5 px) is a format error too.
+    let mut h = Header::new(10, 10, Layout::Grey, 50, 8, Coding::Raw { bits: 8 });
+    h.lattice = Some(qcs::container::LatticeFields {
+        root_length: 0x8000,
+        origin_x: 0,
+        origin_y: 0,
+    });
+    let bytes = h.encode().unwrap();
+    let e = qcs::decode(&bytes, &Default::default()).expect_err("rejected");
+    match e {
+        Error::Format(FormatError::InvalidField {
+            field,
+            offset,
+            value,
+            ..
+        }) => {
+            assert_eq!((field, value), ("lattice root length", 0x8000));
+            assert_eq!(
+                offset as usize,
+                bytes.len() - 4 - 1 - 1 - 3,
+                "root at its byte"
+            );
+        }
+        other => panic!("{other}"),
+    }
+}
+
+/// The largest file the format and raised limits allow: 65535², as many samples as pixels
+/// (≈ 2^32) at 1 bit. Only
+/// level 0 (8 samples) is given; decoding must cost what those bytes cost.
+fn giant_claim() -> Vec<u8> {
+    let h = Header::new(
+        65535,
+        65535,
+        Layout::Grey,
+        65535 * 65535,
+        8,
+        Coding::Raw { bits: 1 },
+    );
+    let mut file = h.encode().expect("valid header");
+    file.extend(qcs::container::chunk::encode(b'L', &[0b1010_1010]).expect("level 0"));
+    file
+}
+
+fn raised() -> Limits {
+    let mut l = Limits::none();
+    l.max_output_pixels = 64 * 64;
+    l
+}
+
+#[test]
+fn giant_claims_cost_what_the_bytes_cost() {
+    let file = giant_claim();
+    let t = std::time::Instant::now();
+    let d = qcs::decode(&file, &small(raised())).expect("a picture from level 0");
+    assert_eq!(
+        (d.samples_used, d.samples_verified, d.levels_complete),
+        (8, 8, 1)
+    );
+    assert!(!d.is_final);
+    let mut s = StreamDecoder::new(raised());
+    for b in &file {
+        s.push(std::slice::from_ref(b)).expect("push");
+    }
+    let p = s.render(Method::Gouraud, 64, 64).expect("render");
+    assert_eq!(p.decoded().samples_used, 8);
+    // Output size is checked before allocating: over the limit, and beyond memory with none.
+    assert!(matches!(
+        s.render(Method::Gouraud, 65, 64),
+        Err(Error::Limits(_))
+    ));
+    let mut s = StreamDecoder::new(Limits::none());
+    s.push(&file).expect("push");
+    assert!(matches!(
+        s.render(Method::Gouraud, u32::MAX, u32::MAX),
+        Err(Error::Parameter(_))
+    ));
+    assert!(t.elapsed().as_secs_f64() < 5.0, "took {:?}", t.elapsed());
+    // The default limits reject the claim at the header.
+    assert!(matches!(
+        qcs::decode(&file, &Default::default()),
+        Err(Error::Limits(_))
+    ));
+    // The parser alone: the header event, then level 0, nothing sized by N.
+    let mut p = Parser::new(ParserOptions::with_limits(Limits::none()));
+    let mut ev = Vec::new();
+    p.push(&file, &mut ev).expect("parse");
+    assert_eq!(p.progress().samples_verified, 8);
+}
+
+const CHILD: &str = "QCS_ROBUSTNESS_MEMORY_CHILD";
+
+/// Peak resident memory of this process, in KiB (Linux).
+fn peak_rss_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// Run in a child process (so that other tests do not count): decodes the giant claims.
+#[test]
+#[ignore = "run by giant_claims_use_bounded_memory in a child process"]
+fn memory_child() {
+    if std::env::var_os(CHILD).is_none() {
+        return;
+    }
+    let before = peak_rss_kib().unwrap_or(0);
+    let file = giant_claim();
+    for _ in 0..3 {
+        let d = qcs::decode(&file, &small(raised())).expect("picture");
+        assert_eq!(d.samples_used, 8);
+        let mut s = StreamDecoder::new(raised());
+        s.push(&file[..file.len() / 2]).expect("push");
+        s.push(&file[file.len() / 2..]).expect("push");
+        s.render(Method::Natural, 64, 64).expect("render");
+    }
+    println!("PEAK_RSS_KIB {before} {}", peak_rss_kib().unwrap_or(0));
+}
+
+#[test]
+fn giant_claims_use_bounded_memory() {
+    if peak_rss_kib().is_none() {
+        eprintln!("no /proc/self/status: skipped");
+        return;
+    }
+    let out = std::process::Command::new(std::env::current_exe().expect("test binary"))
+        .args([
+            "--exact",
+            "memory_child",
+            "--include-ignored",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(CHILD, "1")
+        .output()
+        .expect("run child");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "child failed: {text}");
+    let line = text
+        .lines()
+        .find_map(|l| l.split("PEAK_RSS_KIB").nth(1))
+        .expect("child report");
+    let v: Vec<u64> = line
+        .split_whitespace()
+        .map(|x| x.parse().expect("KiB"))
+        .collect();
+    let grown = v[1].saturating_sub(v[0]);
+    eprintln!(
+        "peak RSS {} KiB before, {} KiB after (+{grown} KiB)",
+        v[0], v[1]
+    );
+    // A claim-sized allocation would be ≥ 2^32 samples: gigabytes. Allow 64 MiB.
+    assert!(
+        grown < 64 * 1024,
+        "decoding a giant claim grew the peak RSS by {grown} KiB"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fuzz corpus replay: every committed regression through the same harness as the fuzzer.
+
+fn harness(target: &str) -> Option<fn(&[u8])> {
+    Some(match target {
+        "decode" => |d| {
+            qcs::fuzzing::decode(d);
+        },
+        "push" => qcs::fuzzing::push,
+        "header" => qcs::fuzzing::header,
+        "roundtrip" => qcs::fuzzing::roundtrip,
+        _ => return None,
+    })
+}
+
+fn files_in(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .map(|r| {
+            r.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file())
+                .collect()
+        })
+        .unwrap_or_default();
+    v.retain(|p| {
+        !p.file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+    });
+    v.sort();
+    v
+}
+
+#[test]
+fn replay_fuzz_regressions() {
+    let fuzz = root().join("fuzz");
+    let mut n = 0;
+    for target in ["decode", "push", "header", "roundtrip"] {
+        let run = harness(target).expect("known target");
+        let mut files = files_in(&fuzz.join("corpus").join(target).join("regressions"));
+        files.extend(files_in(&fuzz.join("artifacts").join(target)));
+        for path in files {
+            let data = std::fs::read(&path).expect("read");
+            let r = std::panic::catch_unwind(|| run(&data));
+            assert!(r.is_ok(), "{target}: {} fails", path.display());
+            n += 1;
+        }
+    }
+    eprintln!("replayed {n} regression inputs");
+}
+
+#[test]
+fn vectors_through_every_harness() {
+    for (_, file) in vectors() {
+        // The harnesses take control bytes first (see qcs::fuzzing).
+        for ctl in [&[16u8, 12, 0][..], &[63, 1, 0x81], &[5, 40, 2]] {
+            let mut d = ctl.to_vec();
+            d.extend_from_slice(&file);
+            let pic = qcs::fuzzing::decode(&d).expect("vector decodes");
+            assert!(pic.is_final || ctl[2] & 0x80 != 0);
+        }
+        for seed in [*b"abcd", *b"\0\0\0\0", *b"zzzz"] {
+            let mut d = seed.to_vec();
+            d.extend_from_slice(&file);
+            qcs::fuzzing::push(&d);
+        }
+        qcs::fuzzing::header(&file);
+    }
+    for ctl in [
+        [0u8; 8],
+        [7, 5, 2, 4, 48, 3, 3, 0],
+        [23, 23, 3, 0, 255, 15, 1, 9],
+    ] {
+        let mut d = ctl.to_vec();
+        d.extend_from_slice(b"some pixels \x00\xff\x80");
+        qcs::fuzzing::roundtrip(&d);
+        qcs::fuzzing::roundtrip(&ctl); // constant (zero) pixels
+    }
+}

@@ -1,0 +1,278 @@
+//! The conformance set in `spec/vectors/`: small `.qcs` files and the pictures they decode to.
+//!
+//! Checked by default. `QCS_REGENERATE=1 cargo test --release --test vectors` rewrites every
+//! `.qcs`, the expected PNGs and `spec/vectors/README.md` from the definitions below (do it when
+//! the encoder or the reconstruction changes on purpose, then review the diff).
+//!
+//! For each vector `NAME`: `NAME.qcs`, `NAME.png` (the whole file decoded at the image's size,
+//! Gouraud) and `NAME.half.png` (the first ⌊len/2⌋ bytes decoded the same way). A decoder matches
+//! when every channel of every pixel is within ±1 of the PNG.
+
+use image::{DynamicImage, GenericImageView};
+use qcs::container::{Coding, Header};
+use qcs::sites::Frame;
+use qcs::{DecodeOptions, EncodeOptions};
+use std::path::{Path, PathBuf};
+
+/// Largest per-channel difference a conforming decoder may show.
+const TOLERANCE: u8 = 1;
+
+struct Vector {
+    name: &'static str,
+    what: &'static str,
+    image: DynamicImage,
+    opts: EncodeOptions,
+}
+
+fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("spec/vectors")
+}
+
+/// A deterministic test picture: gradients, a disc and a hard diagonal edge, per channel.
+fn pattern(w: u32, h: u32, channels: usize) -> Vec<u8> {
+    let mut out = Vec::with_capacity((w * h) as usize * channels);
+    for y in 0..h {
+        for x in 0..w {
+            let (fx, fy) = (x as f64 / w as f64, y as f64 / h as f64);
+            let d = ((fx - 0.6).powi(2) + (fy - 0.45).powi(2)).sqrt();
+            let disc = d < 0.28;
+            let edge = x + 2 * y > w;
+            for k in 0..channels {
+                let v = match k {
+                    0 if disc => 230.0 - 200.0 * d,
+                    0 => 40.0 + 180.0 * fx,
+                    1 if edge => 200.0 * fy + 30.0,
+                    1 => 20.0 + 60.0 * fx,
+                    2 => 255.0 * (1.0 - fx) * (0.5 + 0.5 * fy),
+                    // Alpha: opaque top-left, fading to a quarter at the bottom right.
+                    _ => 255.0 - 190.0 * (fx + fy) / 2.0,
+                };
+                out.push(v.round().clamp(0.0, 255.0) as u8);
+            }
+        }
+    }
+    out
+}
+
+fn vectors() -> Vec<Vector> {
+    let grey = |w, h| {
+        DynamicImage::ImageLuma8(image::GrayImage::from_raw(w, h, pattern(w, h, 1)).unwrap())
+    };
+    let rgb =
+        |w, h| DynamicImage::ImageRgb8(image::RgbImage::from_raw(w, h, pattern(w, h, 3)).unwrap());
+    let rgba = |w, h| {
+        DynamicImage::ImageRgba8(image::RgbaImage::from_raw(w, h, pattern(w, h, 4)).unwrap())
+    };
+    let base = |n, bits| EncodeOptions {
+        samples: Some(n),
+        coding: Coding::Raw { bits },
+        first_level: 8,
+        ..Default::default()
+    };
+    vec![
+        Vector {
+            name: "grey-8",
+            what: "grey, raw 8 bits, default lattice",
+            image: grey(32, 24),
+            opts: base(120, 8),
+        },
+        Vector {
+            name: "rgb-8",
+            what: "RGB, raw 8 bits, default lattice",
+            image: rgb(40, 30),
+            opts: base(150, 8),
+        },
+        Vector {
+            name: "rgba-8",
+            what: "RGBA, raw 8 bits, default lattice, alpha gradient",
+            image: rgba(32, 32),
+            opts: base(128, 8),
+        },
+        Vector {
+            name: "rgb-5",
+            what: "RGB, raw 5 bits (samples straddle bytes), L0 = 5",
+            image: rgb(48, 32),
+            opts: EncodeOptions {
+                first_level: 5,
+                ..base(192, 5)
+            },
+        },
+        Vector {
+            name: "rgb-5-frame",
+            what: "RGB, raw 5 bits, explicit lattice: root 1.5 px, origin (−7.25, −20.5) px",
+            image: rgb(36, 36),
+            opts: EncodeOptions {
+                frame: Some(Frame {
+                    root_len: 0x1_8000,
+                    origin: [-(7 << 16) - 0x4000, -(20 << 16) - 0x8000],
+                }),
+                ..base(160, 5)
+            },
+        },
+        Vector {
+            name: "grey-8-text",
+            what: "grey, raw 8 bits, two text chunks after level 0 (one with a UTF-8 value)",
+            image: grey(24, 24),
+            opts: EncodeOptions {
+                text: vec![
+                    ("Title".into(), "qcs conformance".into()),
+                    ("Comment".into(), "Penrose — τ = 1.618…".into()),
+                ],
+                ..base(72, 8)
+            },
+        },
+    ]
+}
+
+fn decode_png(bytes: &[u8]) -> DynamicImage {
+    qcs::decode(bytes, &DecodeOptions::default())
+        .expect("vector decodes")
+        .image
+}
+
+fn write_png(path: &Path, img: &DynamicImage) {
+    img.save_with_format(path, image::ImageFormat::Png)
+        .unwrap_or_else(|e| panic!("writing {}: {e}", path.display()));
+}
+
+fn max_diff(a: &DynamicImage, b: &DynamicImage) -> u8 {
+    assert_eq!(a.dimensions(), b.dimensions(), "size");
+    assert_eq!(a.color(), b.color(), "layout");
+    a.as_bytes()
+        .iter()
+        .zip(b.as_bytes())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
+fn regenerate() {
+    let mut table = String::new();
+    for v in vectors() {
+        let bytes = qcs::encode(&v.image, &v.opts).expect("encode vector");
+        let (h, header_len) = Header::parse(&bytes).expect("own header");
+        std::fs::write(dir().join(format!("{}.qcs", v.name)), &bytes).expect("write vector");
+        write_png(&dir().join(format!("{}.png", v.name)), &decode_png(&bytes));
+        write_png(
+            &dir().join(format!("{}.half.png", v.name)),
+            &decode_png(&bytes[..bytes.len() / 2]),
+        );
+        let bits = match h.coding {
+            Coding::Raw { bits } => bits,
+            Coding::Predictive { .. } => 0,
+        };
+        table.push_str(&format!(
+            "| `{}` | {}×{} | {:?} | {} | {} | {} | {} | {} | {} |\n",
+            v.name,
+            h.width,
+            h.height,
+            h.layout,
+            bits,
+            h.total_samples,
+            h.first_level,
+            h.level_count(),
+            header_len,
+            bytes.len(),
+        ));
+        table.push_str(&format!("|   | {} |||||||||\n", v.what));
+    }
+    let readme = format!(
+        "# Conformance vectors\n\n\
+         Small `.qcs` files (spec/format.md, spec/sites.md) and the pictures they decode to.\n\
+         Generated by `tests/vectors.rs`; do not edit by hand.\n\n\
+         For each `NAME`:\n\n\
+         - `NAME.qcs`: the file.\n\
+         - `NAME.png`: the whole file decoded at the image's own size with the Gouraud method.\n\
+         - `NAME.half.png`: the first ⌊len / 2⌋ bytes decoded the same way (a cut download: the\n  \
+           verified levels plus the complete, unverified samples of the partial level chunk).\n\n\
+         A decoder conforms when every channel of every pixel is within ±{TOLERANCE} of the PNG.\n\
+         The PNGs follow the reference reconstruction, which may still change: regenerate every\n\
+         file with one command,\n\n\
+         ```\nQCS_REGENERATE=1 cargo test --release --test vectors\n```\n\n\
+         and review the diff. `cargo test` checks them otherwise (and that the encoder still\n\
+         writes the same bytes). The sample colours are the encoder's choice\n\
+         (`SampleColour::Progressive`); the files, not the encoder, are the reference.\n\n\
+         | name | size | layout | bits | N | L0 | levels | header bytes | file bytes |\n\
+         |---|---|---|---|---|---|---|---|---|\n{table}\n\
+         The `sites-*.csv` files are the site-sequence vectors of spec/sites.md (not part of this\n\
+         set).\n"
+    );
+    std::fs::write(dir().join("README.md"), readme).expect("write README");
+}
+
+fn regenerating() -> bool {
+    std::env::var_os("QCS_REGENERATE").is_some_and(|v| v == "1")
+}
+
+#[test]
+fn vectors_decode_to_their_pngs() {
+    if regenerating() {
+        regenerate();
+    }
+    let mut report = Vec::new();
+    for v in vectors() {
+        let bytes = std::fs::read(dir().join(format!("{}.qcs", v.name)))
+            .unwrap_or_else(|e| panic!("{}.qcs: {e} (QCS_REGENERATE=1 writes it)", v.name));
+        for (suffix, prefix) in [("png", bytes.len()), ("half.png", bytes.len() / 2)] {
+            let path = dir().join(format!("{}.{suffix}", v.name));
+            let want = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let got = decode_png(&bytes[..prefix]);
+            let d = max_diff(&got, &want);
+            report.push(format!("{}.{suffix}: max diff {d}", v.name));
+            assert!(
+                d <= TOLERANCE,
+                "{}: max channel difference {d} > {TOLERANCE}",
+                path.display()
+            );
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+#[test]
+fn vectors_are_what_the_encoder_writes() {
+    if regenerating() {
+        return; // the other test rewrites them
+    }
+    for v in vectors() {
+        let want = std::fs::read(dir().join(format!("{}.qcs", v.name))).expect("vector");
+        let got = qcs::encode(&v.image, &v.opts).expect("encode");
+        assert!(
+            got == want,
+            "{}: the encoder writes other bytes now",
+            v.name
+        );
+    }
+}
+
+#[test]
+fn vectors_cover_what_the_set_promises() {
+    use qcs::container::{inspect, Layout, Metadata};
+    let mut layouts = Vec::new();
+    let (mut bits5, mut bits8, mut frame, mut text) = (false, false, false, false);
+    for v in vectors() {
+        let bytes = std::fs::read(dir().join(format!("{}.qcs", v.name))).expect("vector");
+        assert!(bytes.len() < 4096, "{}: keep vectors tiny", v.name);
+        let ins = inspect(&bytes);
+        assert!(ins.error.is_none(), "{}: {:?}", v.name, ins.error);
+        let h = ins.header.expect("header");
+        assert!(h.width <= 48 && h.height <= 48);
+        assert_eq!(
+            ins.samples_verified, h.total_samples,
+            "{}: complete",
+            v.name
+        );
+        layouts.push(h.layout);
+        bits5 |= h.coding == Coding::Raw { bits: 5 };
+        bits8 |= h.coding == Coding::Raw { bits: 8 };
+        frame |= h.lattice.is_some();
+        text |= ins
+            .metadata
+            .iter()
+            .any(|m| matches!(m, Metadata::Text { .. }));
+    }
+    for l in [Layout::Grey, Layout::Rgb, Layout::Rgba] {
+        assert!(layouts.contains(&l), "{l:?} missing");
+    }
+    assert!(bits5 && bits8 && frame && text);
+}
