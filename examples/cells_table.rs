@@ -129,7 +129,7 @@ fn table(list: &[Photo]) {
     println!("| photo | 1089 | 4225 | 16641 |");
     println!("|---|---|---|---|");
     for p in list {
-        let src = SourceImage::new(&p.rgb, p.w, p.h, 3);
+        let src = SourceImage::new(&p.rgb, p.w, p.h, 3).expect("rgb buffer");
         let qc = Quasicrystal::new(p.w, p.h).expect("frame");
         let cols: Vec<String> = [1089usize, 4225, 16641]
             .iter()
@@ -151,7 +151,7 @@ fn monotone(list: &[Photo]) {
         .iter()
         .filter(|p| ["astronaut", "coffee"].contains(&p.name.as_str()))
     {
-        let src = SourceImage::new(&p.rgb, p.w, p.h, 3);
+        let src = SourceImage::new(&p.rgb, p.w, p.h, 3).expect("rgb buffer");
         let qc = Quasicrystal::new(p.w, p.h).expect("frame");
         let series: Vec<(f64, f64)> = (1000..=6000)
             .step_by(50)

@@ -38,7 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .into_iter()
             .map(|s| s.pos)
             .collect();
-        let src = SourceImage::new(img.as_raw(), w, h, 3);
+        let src = SourceImage::new(img.as_raw(), w, h, 3)?;
         for (r, (_, rule)) in rules.iter().enumerate() {
             let colours = src.colours(&sites, *rule, n);
             for (s, share) in shares.iter().enumerate() {

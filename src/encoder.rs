@@ -137,7 +137,7 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         )),
         Coding::Raw { .. } => None,
     };
-    let source = SourceImage::new(&pixels, width, height, channels);
+    let source = SourceImage::new(&pixels, width, height, channels)?;
     let colours = source.colours(&positions, opts.colour, n as usize);
     let mut w = ContainerWriter::new(writer, &header)?;
     for k in 0..header.level_count() {

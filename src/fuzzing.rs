@@ -127,6 +127,9 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
     if let Ok(d) = &strict {
         let (header, _) = Header::parse(file).expect("a decoded file has a parsable header");
         check_decoded(d, &header, w, h);
+        if !matches!(header.coding, crate::container::Coding::Raw { .. }) {
+            return strict.ok();
+        }
         assert!(
             raw_result.is_ok(),
             "raw decoder fails where decode succeeds"
@@ -370,7 +373,7 @@ pub fn roundtrip(data: &[u8]) {
     let q = Quasicrystal::with_frame(w, h, frame.unwrap_or_else(|| Frame::default_for(w, h)))
         .expect("frame within bounds");
     let sites: Vec<_> = q.first(n as usize).into_iter().map(|s| s.pos).collect();
-    let source = SourceImage::new(&pixels, w, h, c);
+    let source = SourceImage::new(&pixels, w, h, c).expect("harness buffers match");
     let expected: Vec<u8> = source
         .colours(&sites, colour, n as usize)
         .iter()

@@ -32,9 +32,9 @@ pub struct Limits {
     /// This is also the bound on the decoder's memory for sites, colours and the triangulation,
     /// which grows with the samples actually received (never with N itself): about 0.9 KiB per
     /// sample at peak for a [`crate::StreamDecoder`] rendering all of them (measured: 895 bytes
-    /// per sample for 2^20 samples, Gouraud). At the default 2^24 that is up to ~15 GiB, reached
-    /// only by a file that really holds 2^24 samples (≥ 2 MiB at 1 bit grey, 48 MiB at 8-bit
-    /// RGB); lower it for untrusted input on small machines.
+    /// per sample for 2^20 samples, Gouraud). The default 2^21 (enough for a 16-megapixel photo
+    /// at the default 1 sample per 8 pixels) bounds that to about 1.8 GiB, reached only by a file
+    /// that really holds 2^21 samples; raise it for larger images, lower it on small machines.
     pub max_samples: u64,
     /// Largest total size of metadata (ICC, text) kept by a decoder.
     pub max_metadata_bytes: u64,
@@ -46,7 +46,7 @@ impl Default for Limits {
             max_dimension: 1 << 15,
             max_image_pixels: 1 << 28,
             max_output_pixels: 1 << 28,
-            max_samples: 1 << 24,
+            max_samples: 1 << 21,
             max_metadata_bytes: 1 << 24,
         }
     }

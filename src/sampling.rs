@@ -33,10 +33,12 @@ pub enum SampleColour {
 /// ```
 /// use qcs::sampling::{SampleColour, SourceImage};
 /// let pixels = vec![10u8, 20, 30, 40]; // 2×2 grey
-/// let s = SourceImage::new(&pixels, 2, 2, 1);
+/// let s = SourceImage::new(&pixels, 2, 2, 1)?;
 /// assert_eq!(s.colours(&[[0.5, 0.5]], SampleColour::Nearest, 1), vec![10]);
 /// assert_eq!(s.colours(&[[1.0, 1.0]], SampleColour::Bilinear, 1), vec![25]);
 /// assert_eq!(s.colours(&[[1.0, 1.0]], SampleColour::Area, 1), vec![25]);
+/// assert!(SourceImage::new(&pixels, 3, 2, 1).is_err());
+/// # Ok::<(), qcs::Error>(())
 /// ```
 pub struct SourceImage<'a> {
     pixels: &'a [u8],
@@ -49,9 +51,20 @@ pub struct SourceImage<'a> {
 
 impl<'a> SourceImage<'a> {
     /// Wraps `pixels` (`width × height × channels`, row-major, interleaved).
-    pub fn new(pixels: &'a [u8], width: u32, height: u32, channels: usize) -> Self {
+    ///
+    /// A buffer of another length, or an empty image, is [`crate::Error::Parameter`].
+    pub fn new(pixels: &'a [u8], width: u32, height: u32, channels: usize) -> crate::Result<Self> {
         let (w, h, c) = (width as usize, height as usize, channels);
-        assert_eq!(pixels.len(), w * h * c, "pixel buffer size");
+        if w == 0
+            || h == 0
+            || c == 0
+            || w.checked_mul(h).and_then(|p| p.checked_mul(c)) != Some(pixels.len())
+        {
+            return Err(crate::Error::Parameter(format!(
+                "pixel buffer of {} bytes for a {width}×{height}×{channels} image",
+                pixels.len()
+            )));
+        }
         let stride = (w + 1) * c;
         let mut sat = vec![0u64; (w + 1) * (h + 1) * c];
         for y in 0..h {
@@ -64,13 +77,13 @@ impl<'a> SourceImage<'a> {
                 }
             }
         }
-        SourceImage {
+        Ok(SourceImage {
             pixels,
             width: w,
             height: h,
             channels: c,
             sat,
-        }
+        })
     }
 
     fn box_mean(&self, x0: usize, y0: usize, x1: usize, y1: usize, out: &mut Vec<u8>) {

@@ -512,7 +512,7 @@ fn sharpening_is_nearly_monotone() {
     .expect("test image")
     .to_rgb8();
     let (w, h) = img.dimensions();
-    let src = SourceImage::new(img.as_raw(), w, h, 3);
+    let src = SourceImage::new(img.as_raw(), w, h, 3).unwrap();
     let all = sites(w, h, 1600);
     let mut series = [Vec::new(), Vec::new()];
     for n in (400..=1600).step_by(50) {

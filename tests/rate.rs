@@ -126,8 +126,11 @@ fn lossless_round_trip_returns_exact_samples_in_any_chunking() {
         .iter()
         .map(|s| fixed_position(&q.frame(), s.lattice))
         .collect();
-    let colours =
-        SourceImage::new(img.as_raw(), w, h, 3).colours(&pos, SampleColour::Progressive, n);
+    let colours = SourceImage::new(img.as_raw(), w, h, 3).unwrap().colours(
+        &pos,
+        SampleColour::Progressive,
+        n,
+    );
     let levels = [0usize, 8, 16, 32, 64, 128, 256, 512, 1024, 1500];
     let mut enc = PredictiveEncoder::new(Params::lossless(), 3, w, h).unwrap();
     let payloads: Vec<Vec<u8>> = levels

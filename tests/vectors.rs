@@ -110,6 +110,28 @@ fn vectors() -> Vec<Vector> {
             },
         },
         Vector {
+            name: "rgb-predictive-q75",
+            what: "RGB, predictive coding (coding 1) at quality 75",
+            image: rgb(48, 40),
+            opts: EncodeOptions {
+                coding: Coding::Predictive {
+                    params: qcs::coding::predictive::Params::from_quality(75).to_bytes(),
+                },
+                ..base(240, 8)
+            },
+        },
+        Vector {
+            name: "grey-predictive-lossless",
+            what: "grey, predictive coding, lossless samples",
+            image: grey(32, 32),
+            opts: EncodeOptions {
+                coding: Coding::Predictive {
+                    params: qcs::coding::predictive::Params::lossless().to_bytes(),
+                },
+                ..base(128, 8)
+            },
+        },
+        Vector {
             name: "grey-8-text",
             what: "grey, raw 8 bits, two text chunks after level 0 (one with a UTF-8 value)",
             image: grey(24, 24),

@@ -43,7 +43,9 @@ pub struct RenderArgs {
 }
 
 /// Positions and RGB colours of the samples, and the source size.
-fn samples(a: &RenderArgs) -> Result<(Vec<Point>, Vec<u8>, (u32, u32))> {
+type Samples = (Vec<Point>, Vec<u8>, (u32, u32));
+
+fn samples(a: &RenderArgs) -> Result<Samples> {
     let bytes =
         std::fs::read(&a.input).with_context(|| format!("cannot read {}", a.input.display()))?;
     if bytes.starts_with(&qcs::container::MAGIC) {
@@ -79,7 +81,7 @@ fn samples(a: &RenderArgs) -> Result<(Vec<Point>, Vec<u8>, (u32, u32))> {
         bail!("unknown sampler {:?}", a.sampler);
     };
     let pos = sampler.sites(w, h, n);
-    let col = SourceImage::new(img.as_raw(), w, h, 3).colours(&pos, SampleColour::Area, n);
+    let col = SourceImage::new(img.as_raw(), w, h, 3)?.colours(&pos, SampleColour::Area, n);
     Ok((pos, col, (w, h)))
 }
 
