@@ -12,6 +12,7 @@
 //! [`coding`] (colours ↔ bits) → [`container`] (bytes on disk) →
 //! [`reconstruction`] (samples → picture at any size) and [`styles`].
 #![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
 pub mod coding;
 pub mod container;
