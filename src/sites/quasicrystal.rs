@@ -226,7 +226,7 @@ impl Quasicrystal {
         if count == 0 {
             return Vec::new();
         }
-        let mut r = self.radius_for(count as f64 * 1.1 + 16.0);
+        let mut r = self.radius_for(count as f64 * 1.03 + 64.0);
         let mut cand = Vec::new();
         let point = |n: [i32; 4]| ZZeta(n.map(|v| v as i64));
         let mut run: Vec<(i128, i128, i128, [i32; 4])> = Vec::new();
