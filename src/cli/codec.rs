@@ -509,7 +509,7 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
                 pct,
                 cut,
                 d.samples_used,
-                psnr(&reference, &rgb),
+                qcs::eval::psnr(&reference, &rgb)?,
                 path.display()
             );
         }
@@ -522,21 +522,6 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
         println!("side by side: {}", path.display());
     }
     Ok(())
-}
-
-fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
-    let se: f64 = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(&x, &y)| (x as f64 - y as f64).powi(2))
-        .sum();
-    let mse = se / a.as_raw().len() as f64;
-    if mse == 0.0 {
-        f64::INFINITY
-    } else {
-        10.0 * (255.0f64 * 255.0 / mse).log10()
-    }
 }
 
 #[derive(Args, Debug)]
