@@ -391,7 +391,8 @@ fn code_residual<B: BitIo>(
     }
     let neg = io.bit(m, base + 1, q < 0)?;
     let mag = q.unsigned_abs();
-    let e = bitlen(mag) - 1; // 0..
+    // When decoding, `q` is a placeholder: only its bits up to the first read matter.
+    let e = bitlen(mag).saturating_sub(1); // 0..
     let mut got = 0;
     while got < EXP - 1 && io.bit(m, base + 2 + got, got < e)? {
         got += 1;
