@@ -42,7 +42,7 @@ pub struct QcsImageDecoder {
 }
 
 impl QcsImageDecoder {
-    /// Reads the stream (at most [`MAX_FILE_BYTES`]) and parses its header.
+    /// Reads the stream (at most 1 GiB) and parses its header.
     pub fn new<R: Read>(reader: R) -> ImageResult<Self> {
         let mut bytes = Vec::new();
         reader.take(MAX_FILE_BYTES).read_to_end(&mut bytes)?;
