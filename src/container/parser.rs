@@ -187,6 +187,36 @@ enum State {
     Poisoned,
 }
 
+impl State {
+    /// Inside a payload after `received` of its `len` bytes: still reading it, or on to the CRC.
+    fn payload_or_crc(
+        chunk: ChunkRef,
+        len: u32,
+        received: u32,
+        hasher: crc32fast::Hasher,
+        kind: Kind,
+    ) -> State {
+        if received == len {
+            State::Crc {
+                chunk,
+                len,
+                computed: hasher.finalize(),
+                bytes: [0; 4],
+                n: 0,
+                kind,
+            }
+        } else {
+            State::Payload {
+                chunk,
+                len,
+                received,
+                hasher,
+                kind,
+            }
+        }
+    }
+}
+
 /// A push parser for `.qcs` bytes: feed it any chunking of the file (one byte at a time, empty
 /// slices, or all at once) and it emits the same events, as early as they can be known.
 ///
@@ -392,24 +422,7 @@ impl Parser {
                         // A u32 reader never yields more than u32::MAX.
                         let len = u32::try_from(len).unwrap_or(u32::MAX);
                         let kind = self.start_payload(chunk, len, events)?;
-                        self.state = if len == 0 {
-                            State::Crc {
-                                chunk,
-                                len,
-                                computed: hasher.finalize(),
-                                bytes: [0; 4],
-                                n: 0,
-                                kind,
-                            }
-                        } else {
-                            State::Payload {
-                                chunk,
-                                len,
-                                received: 0,
-                                hasher,
-                                kind,
-                            }
-                        };
+                        self.state = State::payload_or_crc(chunk, len, 0, hasher, kind);
                         Ok(1)
                     }
                 }
@@ -434,24 +447,7 @@ impl Parser {
                     Kind::Skip => {}
                 }
                 received += take as u32;
-                self.state = if received == len {
-                    State::Crc {
-                        chunk,
-                        len,
-                        computed: hasher.finalize(),
-                        bytes: [0; 4],
-                        n: 0,
-                        kind,
-                    }
-                } else {
-                    State::Payload {
-                        chunk,
-                        len,
-                        received,
-                        hasher,
-                        kind,
-                    }
-                };
+                self.state = State::payload_or_crc(chunk, len, received, hasher, kind);
                 Ok(take)
             }
             State::Crc {
