@@ -56,11 +56,19 @@ fn photos(dir: &PathBuf) -> Vec<Photo> {
         .collect()
 }
 
-/// Gouraud PSNR with the canonical rule and with spade's split, for the first `n` sites.
-fn both(photo: &Photo, src: &SourceImage<'_>, qc: &Quasicrystal, n: usize) -> (f64, f64) {
+/// Gouraud PSNR with the canonical rule and with spade's split, for the first `n` sites,
+/// coloured by `rule` for a file of `total` samples (`None`: a file of exactly `n`).
+fn both(
+    photo: &Photo,
+    src: &SourceImage<'_>,
+    qc: &Quasicrystal,
+    n: usize,
+    rule: SampleColour,
+    total: Option<usize>,
+) -> (f64, f64) {
     let sites = qc.first(n);
     let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
-    let col = src.colours(&pos, SampleColour::Area, n);
+    let col = src.colours(&pos, rule, total.unwrap_or(n));
     let mut exact = SampleSet::new(photo.w, photo.h, 3);
     let mut plain = SampleSet::new(photo.w, photo.h, 3);
     for (k, s) in sites.iter().enumerate() {
@@ -95,22 +103,30 @@ fn stats() {
             set.push_exact(s.pos, s.lattice, &[0]);
         }
         let _ = set.triangulation();
-        let positions = set.positions().to_vec();
+        let positions = set.points().to_vec();
         let t0 = Instant::now();
         let cells = set.cells().expect("exact").clone();
         let dt = t0.elapsed();
-        let h = cells.histogram();
-        let g = |k: usize| h.get(k).copied().unwrap_or(0);
-        let more: usize = h.iter().skip(6).sum();
+        // Cells of the image: those whose vertex centroid is inside (not mirror-point cells).
+        let mut h = [0usize; 16];
         let (mut big, mut all) = (0.0, 0.0);
         for c in cells.iter() {
             let pts: Vec<_> = c.iter().map(|&i| positions[i as usize]).collect();
+            let k = pts.len() as f64;
+            let cx = pts.iter().map(|p| p[0]).sum::<f64>() / k;
+            let cy = pts.iter().map(|p| p[1]).sum::<f64>() / k;
+            if !(0.0..512.0).contains(&cx) || !(0.0..512.0).contains(&cy) {
+                continue;
+            }
+            h[c.len().min(15)] += 1;
             let a = polygon_area(&pts);
             all += a;
             if c.len() >= 4 {
                 big += a;
             }
         }
+        let g = |k: usize| h[k];
+        let more: usize = h.iter().skip(6).sum();
         println!(
             "| {n} | {} | {} | {} | {more} | {:.1}% | {} | {:.1} ms |",
             g(3),
@@ -134,7 +150,7 @@ fn table(list: &[Photo]) {
         let cols: Vec<String> = [1089usize, 4225, 16641]
             .iter()
             .map(|&n| {
-                let (a, b) = both(p, &src, &qc, n);
+                let (a, b) = both(p, &src, &qc, n, SampleColour::Area, None);
                 format!("{a:.2} / {b:.2} / {:+.2}", a - b)
             })
             .collect();
@@ -145,45 +161,55 @@ fn table(list: &[Photo]) {
 
 fn monotone(list: &[Photo]) {
     println!("## Monotone sharpening, N = 1000..=6000 step 50 (100 steps)\n");
-    println!("| photo | rule | falling steps | worst step | sum of losses |");
-    println!("|---|---|---|---|---|");
+    println!("| photo | colours | rule | falling steps | worst step | sum of losses |");
+    println!("|---|---|---|---|---|---|");
     for p in list
         .iter()
         .filter(|p| ["astronaut", "coffee"].contains(&p.name.as_str()))
     {
         let src = SourceImage::new(&p.rgb, p.w, p.h, 3).expect("rgb buffer");
         let qc = Quasicrystal::new(p.w, p.h).expect("frame");
-        let series: Vec<(f64, f64)> = (1000..=6000)
-            .step_by(50)
-            .map(|n| both(p, &src, &qc, n))
-            .collect();
-        for (rule, pick) in [("canonical", 0), ("spade", 1)] {
-            let v: Vec<f64> = series
-                .iter()
-                .map(|s| if pick == 0 { s.0 } else { s.1 })
+        // Prefixes of one file of the default size (sample colours fixed as N grows), with
+        // the default and the point-sampled colour; and, for comparison, a new file of exactly
+        // N samples at each step (area boxes shrink with N).
+        let file = (p.w as usize * p.h as usize) / 8;
+        for (colours, rule, total) in [
+            ("prefix, progressive", SampleColour::Progressive, Some(file)),
+            ("prefix, point", SampleColour::Nearest, Some(file)),
+            ("file of N, area", SampleColour::Area, None),
+        ] {
+            let series: Vec<(f64, f64)> = (1000..=6000)
+                .step_by(50)
+                .map(|n| both(p, &src, &qc, n, rule, total))
                 .collect();
-            let d: Vec<f64> = v.windows(2).map(|w| w[1] - w[0]).collect();
-            if std::env::var_os("CELLS_VERBOSE").is_some() {
-                for (k, x) in d.iter().enumerate() {
-                    if *x < 0.0 {
-                        eprintln!(
-                            "{} {rule}: N = {} → {}: {x:+.3} dB",
-                            p.name,
-                            1000 + 50 * k,
-                            1050 + 50 * k
-                        );
+            for (rule, pick) in [("canonical", 0), ("spade", 1)] {
+                let v: Vec<f64> = series
+                    .iter()
+                    .map(|s| if pick == 0 { s.0 } else { s.1 })
+                    .collect();
+                let d: Vec<f64> = v.windows(2).map(|w| w[1] - w[0]).collect();
+                if std::env::var_os("CELLS_VERBOSE").is_some() {
+                    for (k, x) in d.iter().enumerate() {
+                        if *x < 0.0 {
+                            eprintln!(
+                                "{} {colours} {rule}: N = {} → {}: {x:+.3} dB",
+                                p.name,
+                                1000 + 50 * k,
+                                1050 + 50 * k
+                            );
+                        }
                     }
                 }
-            }
-            let falls = d.iter().filter(|&&x| x < 0.0).count();
-            let worst = d.iter().copied().fold(0.0f64, f64::min);
-            let sum: f64 = d.iter().filter(|&&x| x < 0.0).sum();
-            println!(
-                "| {} | {rule} | {falls}/{} ({:.0}%) | {worst:.3} dB | {sum:.3} dB |",
+                let falls = d.iter().filter(|&&x| x < 0.0).count();
+                let worst = d.iter().copied().fold(0.0f64, f64::min);
+                let sum: f64 = d.iter().filter(|&&x| x < 0.0).sum();
+                println!(
+                "| {} | {colours} | {rule} | {falls}/{} ({:.0}%) | {worst:.3} dB | {sum:.3} dB |",
                 p.name,
                 d.len(),
                 100.0 * falls as f64 / d.len() as f64
             );
+            }
         }
     }
     println!();

@@ -318,10 +318,7 @@ impl StreamDecoder {
         self.check_output_size(width, height)?;
         let n = self.sample_count();
         let c = self.channels();
-        let mut set = self
-            .set
-            .take()
-            .unwrap_or_else(|| SampleSet::new(h.width, h.height, c));
+        let mut set = self.set.take().unwrap_or_else(|| self.new_set(&h));
         let have = set.len();
         let (sites, col) = self.samples(n);
         for k in have..n as usize {
@@ -341,6 +338,15 @@ impl StreamDecoder {
         } else {
             Picture::Preview(decoded)
         })
+    }
+
+    /// An empty sample set for the file's source size, layout and lattice frame.
+    fn new_set(&self, h: &Header) -> SampleSet {
+        let set = SampleSet::new(h.width, h.height, self.channels());
+        match &self.seq {
+            Some(seq) => set.with_frame(seq.frame()),
+            None => set,
+        }
     }
 
     /// Checks a requested output size before anything is allocated: the limits, a non-empty
@@ -372,9 +378,9 @@ impl StreamDecoder {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
         let c = self.channels();
+        let mut set = self.new_set(&h);
         let (sites, col) = self.samples(k);
         let used = sites.len() as u64;
-        let mut set = SampleSet::new(h.width, h.height, c);
         for (k, s) in sites.iter().enumerate() {
             push_site(&mut set, s, &col[k * c..k * c + c]);
         }

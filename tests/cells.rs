@@ -254,9 +254,15 @@ fn mirrored_sites_give_the_mirrored_picture() {
     let all = sites(w, h, 500);
     let cols = colours_for(&all, w, h);
     let mut spade_differs = 0;
+    // The mirrored sites are the conjugate lattice points in the mirrored frame.
+    let frame = qcs::sites::Frame::default_for(w, h);
+    let mirrored = qcs::sites::Frame {
+        root_len: frame.root_len,
+        origin: [frame.origin[0], ((h as i32) << 16) - frame.origin[1]],
+    };
     for n in [40, 111, 260, 500] {
         let mut a = SampleSet::new(w, h, 3);
-        let mut b = SampleSet::new(w, h, 3);
+        let mut b = SampleSet::new(w, h, 3).with_frame(mirrored);
         let mut pa = SampleSet::new(w, h, 3);
         let mut pb = SampleSet::new(w, h, 3);
         for (k, s) in all[..n].iter().enumerate() {
@@ -272,8 +278,15 @@ fn mirrored_sites_give_the_mirrored_picture() {
             img.chunks(row).rev().flatten().copied().collect()
         };
         let ia = a.render(Method::Gouraud, w, h);
-        let ib = b.render(Method::Gouraud, w, h);
-        assert!(ia == flip(&ib), "n = {n}");
+        let ib = flip(&b.render(Method::Gouraud, w, h));
+        // The same cells; mirror points' positions are computed in each frame, so rounding
+        // may move a channel by one level (the conformance tolerance).
+        let off = ia.iter().zip(&ib).filter(|(x, y)| x != y).count();
+        let worst = ia.iter().zip(&ib).map(|(x, y)| x.abs_diff(*y)).max();
+        assert!(
+            worst <= Some(1) && off * 200 < ia.len(),
+            "n = {n}: {off} {worst:?}"
+        );
         let (ja, jb) = (
             pa.render(Method::Gouraud, w, h),
             pb.render(Method::Gouraud, w, h),
@@ -300,24 +313,30 @@ fn linear_ramp_is_reproduced_by_every_cell_at_every_prefix() {
             let c = ramp(s.pos).map(|v| v.round().clamp(0.0, 255.0) as u8);
             set.push_exact(s.pos, s.lattice, &c);
         }
-        let hull: Vec<[f64; 2]> = set
-            .triangulation()
-            .convex_hull()
-            .map(|e| {
-                let p = e.from().position();
-                [p.x, p.y]
-            })
+        // Cells with a mirror point carry a sample's colour away from it: check the cells
+        // whose vertices are all samples.
+        let samples: std::collections::HashSet<[u64; 2]> = set
+            .positions()
+            .iter()
+            .map(|p| p.map(f64::to_bits))
+            .collect();
+        let points = set.points().to_vec();
+        let polys: Vec<Vec<[f64; 2]>> = set
+            .cells()
+            .expect("cells")
+            .iter()
+            .map(|c| c.iter().map(|&i| points[i as usize]).collect::<Vec<_>>())
+            .filter(|c| c.iter().all(|p| samples.contains(&p.map(f64::to_bits))))
             .collect();
         let inside = |q: [f64; 2]| {
-            (0..hull.len()).all(|i| {
-                let (a, b) = (hull[i], hull[(i + 1) % hull.len()]);
-                // spade's hull runs clockwise in these (y-down read as Cartesian) terms or not:
-                // accept either orientation consistently by testing with a margin.
-                let cr = (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]);
-                cr.abs() > 1e-6 && cr.signum() == hull_sign(&hull)
+            polys.iter().any(|poly| {
+                (0..poly.len()).all(|i| {
+                    let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+                    let cr = (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]);
+                    cr.abs() > 1e-6 && cr.signum() == hull_sign(poly)
+                })
             })
         };
-        assert!(set.cells().is_some());
         let img = set.render(Method::Gouraud, w, h);
         let mut checked = 0;
         for j in 0..h as usize {
@@ -341,7 +360,7 @@ fn linear_ramp_is_reproduced_by_every_cell_at_every_prefix() {
                 }
             }
         }
-        assert!(n < 50 || checked > 2000, "n = {n}: {checked}");
+        assert!(n < 50 || checked > 1500, "n = {n}: {checked}");
     }
 }
 
@@ -372,11 +391,12 @@ fn cells_are_the_delaunay_subdivision() {
     for n in [3, 4, 5, 9, 31, 77, 150, 333, 600] {
         let mut slivers = 0;
         let s = &all[..n];
-        let lat: Vec<ZZeta> = s.iter().map(|x| x.lattice).collect();
         let mut set = SampleSet::new(w, h, 1);
         for x in s {
             set.push_exact(x.pos, x.lattice, &[0]);
         }
+        // Samples and their mirror points.
+        let lat: Vec<ZZeta> = set.point_lattice().iter().map(|x| x.unwrap()).collect();
         let faces: Vec<[u32; 3]> = set
             .triangulation()
             .inner_faces()
@@ -547,11 +567,16 @@ fn sharpening_is_nearly_monotone() {
         mean(&series[0]),
         mean(&series[1])
     );
-    // Measured (128×128, 25 counts): canonical 1 fall of −0.13 dB (at N = 1250, where
-    // spade's split falls too: the area-mean boxes change there), spade −0.18 dB.
-    assert!(cf <= 2 && cw > -0.15 && cs > -0.2, "{cf} {cw} {cs}");
+    // Issue #11's bounds: at most 15% of the steps fall, none by more than 0.08 dB, losses
+    // summing to at most 0.3 dB. Measured (128×128, 24 steps, with mirror points): no step
+    // falls, for either rule (without mirror points: 1 fall of −0.13 dB at N = 1250).
+    let steps = series[0].len() - 1;
     assert!(
-        cs >= ss && cw >= sw,
+        cf * 100 <= 15 * steps && cw >= -0.08 && cs >= -0.3,
+        "{cf} {cw} {cs}"
+    );
+    assert!(
+        cs >= ss - 0.02 && cw >= sw - 0.02,
         "canonical {cw} {cs} vs spade {sw} {ss}"
     );
     assert!(mean(&series[0]) > mean(&series[1]) + 0.1);
@@ -559,12 +584,12 @@ fn sharpening_is_nearly_monotone() {
 
 #[test]
 fn spec_worked_example() {
-    // spec/reconstruction.md §5: the regular pentagon of unit roots, 8 px per root.
+    // spec/reconstruction.md §6: the regular pentagon of unit roots, 8 px per root.
     let frame = qcs::sites::Frame {
         root_len: 8 << 16,
         origin: [16 << 16, 16 << 16],
     };
-    let mut set = SampleSet::new(32, 32, 1);
+    let mut set = SampleSet::new(32, 32, 1).with_frame(frame);
     let mut plain = SampleSet::new(32, 32, 1);
     for m in 0..5 {
         let x = zeta(m);
@@ -572,9 +597,12 @@ fn spec_worked_example() {
         plain.push(frame.position(x), &[50 * m as u8]);
     }
     let img = set.render(Method::Gouraud, 32, 32);
-    assert_eq!(
-        set.cells().map(|c| c.histogram()),
-        Some(vec![0, 0, 0, 0, 0, 1])
+    // The pentagon is one cell (its mirror points, at least 8 px beyond the edges, are
+    // outside its circle), counter-clockwise from ζ⁴.
+    let cells = set.cells().expect("cells");
+    assert!(
+        cells.iter().any(|c| c == [4, 0, 1, 2, 3].map(|k| 9 * k)),
+        "{cells:?}"
     );
     assert_eq!(img[16 * 32 + 20], 42);
     assert_eq!(img[20 * 32 + 16], 74);

@@ -10,10 +10,18 @@
 //! Shepard and natural-neighbour weights, like the outside-the-hull rule, are computed at the
 //! output pixel centre mapped back to source pixels.
 //!
+//! # Mirror points
+//!
+//! Gouraud and natural neighbour triangulate the samples together with their **mirror
+//! points**: each sample near an image edge, reflected across it, carrying its colour (see
+//! the `mirror` module and `spec/reconstruction.md` §2). The picture is then as well shaped
+//! at the edges as inside, and gets better, not worse, as samples arrive there.
+//!
 //! # Outside the convex hull
 //!
-//! Gouraud and natural neighbour are only defined inside the convex hull of the samples. A
-//! pixel centre outside it takes the colour of the **nearest point of the hull boundary**
+//! Gouraud and natural neighbour are only defined inside the convex hull of the samples and
+//! their mirror points, which covers the image from the first sample on (its mirror points
+//! surround it) unless the samples are outside the image. A pixel centre outside it takes the colour of the **nearest point of the hull boundary**
 //! (distance in source pixels), colours being linear along each hull edge between its two end
 //! samples. This continues the interpolation without a seam and leaves no black border. With
 //! one sample the whole picture takes its colour; with two (or all collinear) the boundary is
@@ -30,7 +38,7 @@
 //! let col = [0u8, 90, 30];
 //! let img = render((4, 4), 1, &pos, &col, Method::Gouraud, 8, 8);
 //! assert_eq!(img.len(), 64);
-//! assert_eq!(img[0], 0); // pixel centre (0.25, 0.25) in source pixels, outside the hull
+//! assert_eq!(img[0], 0); // pixel centre (0.25, 0.25): near sample 0, between its mirror points
 //! ```
 
 // Per-channel loops over fixed-size colour arrays read best with indices.
@@ -40,6 +48,7 @@ mod cells;
 mod gouraud;
 mod hull;
 mod mesh;
+mod mirror;
 mod natural;
 mod raster;
 mod shepard;
@@ -48,7 +57,7 @@ use rayon::prelude::*;
 use spade::Triangulation as _;
 
 use crate::lattice::ZZeta;
-use crate::sites::Point;
+use crate::sites::{Frame as LatticeFrame, Point};
 
 pub use cells::Cells;
 pub use gouraud::{cell_triangles, triangles};
@@ -59,6 +68,7 @@ pub use raster::{rasterise, RasterTriangle, RasterVertex};
 pub use shepard::Grid;
 
 use hull::Boundary;
+use mirror::{mirror_points, Lines};
 use raster::Band;
 
 /// How a picture is rebuilt from its samples.
@@ -107,6 +117,25 @@ impl Default for RenderOptions {
     }
 }
 
+/// The points a [`SampleSet`] triangulates: its samples and their mirror points, each with
+/// the colour it carries and its lattice point if it has one.
+#[derive(Clone, Debug, Default)]
+struct Points {
+    positions: Vec<Point>,
+    colours: Vec<u8>,
+    lattice: Vec<Option<ZZeta>>,
+    exact: usize,
+}
+
+impl Points {
+    fn push(&mut self, p: Point, lattice: Option<ZZeta>, colour: &[u8]) {
+        self.positions.push(p);
+        self.colours.extend_from_slice(colour);
+        self.exact += lattice.is_some() as usize;
+        self.lattice.push(lattice);
+    }
+}
+
 /// A growing set of samples of one source image.
 ///
 /// Samples are pushed a few at a time (as a streaming decoder reads them) and the set can be
@@ -138,10 +167,10 @@ pub struct SampleSet {
     channels: usize,
     positions: Vec<Point>,
     colours: Vec<u8>,
-    /// Exact lattice point of each sample, if known.
-    lattice: Vec<Option<ZZeta>>,
-    /// Samples with an exact point.
-    exact: usize,
+    /// The lattice mirror lines of the frame exact samples are in.
+    lines: Lines,
+    /// The triangulated points: every sample, each followed by its mirror points.
+    points: Points,
     mesh: Triangulation,
     synced: usize,
     grid: Option<Grid>,
@@ -152,20 +181,49 @@ pub struct SampleSet {
 impl SampleSet {
     /// An empty set for a `source_width × source_height` source with `channels` bytes per colour
     /// (1..=4; other values are clamped into that range).
+    ///
+    /// Exact samples ([`SampleSet::push_exact`]) are taken to be in the default frame
+    /// ([`LatticeFrame::default_for`]); see [`SampleSet::with_frame`] for another.
     pub fn new(source_width: u32, source_height: u32, channels: usize) -> Self {
+        let frame = LatticeFrame::default_for(source_width, source_height);
         SampleSet {
             width: source_width,
             height: source_height,
             channels: channels.clamp(1, 4),
             positions: Vec::new(),
             colours: Vec::new(),
-            lattice: Vec::new(),
-            exact: 0,
+            lines: Lines::new(frame, source_width, source_height),
+            points: Points::default(),
             mesh: Triangulation::new(),
             synced: 0,
             grid: None,
             cells: None,
         }
+    }
+
+    /// The same empty set with exact samples in the lattice frame `frame` (the frame of the
+    /// file's sites, [`crate::sites::Quasicrystal::frame`]). It decides where the mirror
+    /// points of exact samples are (`spec/reconstruction.md`).
+    ///
+    /// ```
+    /// use qcs::reconstruction::SampleSet;
+    /// use qcs::sites::{Frame, Quasicrystal};
+    /// let frame = Frame { root_len: 3 << 15, origin: [-5 << 16, -7 << 16] };
+    /// let seq = Quasicrystal::with_frame(40, 30, frame)?;
+    /// let mut set = SampleSet::new(40, 30, 1).with_frame(seq.frame());
+    /// for s in seq.first(50) {
+    ///     set.try_push_exact(s.pos, s.lattice, &[9])?;
+    /// }
+    /// assert!(set.cells().is_some());
+    /// // In the wrong frame, a lattice point does not match its position.
+    /// let mut wrong = SampleSet::new(40, 30, 1);
+    /// let s = seq.first(1)[0];
+    /// assert!(wrong.try_push_exact(s.pos, s.lattice, &[9]).is_err());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_frame(mut self, frame: LatticeFrame) -> Self {
+        self.lines = Lines::new(frame, self.width, self.height);
+        self
     }
 
     /// Adds one sample: position in source pixels, `channels` colour bytes.
@@ -190,7 +248,7 @@ impl SampleSet {
     }
 
     /// Adds one sample with its exact lattice point `lattice` (`pos` must be its pixel
-    /// position `origin + ℓ·x` in some frame with ℓ > 0, e.g. a [`crate::sites::Site`]).
+    /// position in the set's frame, as in a [`crate::sites::Site`]).
     /// Ignored like [`SampleSet::push`] if unusable; see [`SampleSet::try_push_exact`].
     ///
     /// ```
@@ -209,12 +267,17 @@ impl SampleSet {
     }
 
     /// [`SampleSet::push_exact`], or an error (and nothing added) if the position cannot be
-    /// triangulated or a lattice coordinate is beyond [`crate::lattice::EXACT_LIMIT`].
+    /// triangulated, a lattice coordinate is beyond [`crate::lattice::EXACT_LIMIT`], or `pos`
+    /// is not the lattice point's position in the set's frame ([`SampleSet::with_frame`]).
     ///
     /// ```
     /// use qcs::lattice::ZZeta;
+    /// use qcs::sites::Frame;
+    /// let frame = Frame::default_for(8, 8);
     /// let mut set = qcs::reconstruction::SampleSet::new(8, 8, 1);
-    /// assert!(set.try_push_exact([1.0, 2.0], ZZeta::new([1, 2, 0, 0]), &[7]).is_ok());
+    /// let x = ZZeta::new([5, 3, 0, 1]);
+    /// assert!(set.try_push_exact(frame.position(x), x, &[7]).is_ok());
+    /// assert!(set.try_push_exact([1.0, 2.0], x, &[7]).is_err()); // not where x is
     /// assert!(set.try_push_exact([1.0, 3.0], ZZeta::new([1 << 40, 0, 0, 0]), &[7]).is_err());
     /// assert_eq!(set.len(), 1);
     /// ```
@@ -227,6 +290,12 @@ impl SampleSet {
         if !crate::lattice::within_exact_limit(lattice) {
             return Err(crate::Error::Parameter(format!(
                 "lattice point {lattice:?} is beyond the exact range"
+            )));
+        }
+        let at = self.lines.frame().position(lattice);
+        if (at[0] - pos[0]).abs() > 1e-6 || (at[1] - pos[1]).abs() > 1e-6 {
+            return Err(crate::Error::Parameter(format!(
+                "lattice point {lattice:?} is at {at:?} in this set's frame, not at {pos:?}"
             )));
         }
         self.push_inner(pos, Some(lattice), colour)
@@ -243,12 +312,21 @@ impl SampleSet {
                 "sample position {pos:?} is not usable"
             )));
         };
+        let k = self.positions.len();
         self.positions.push(p);
-        self.exact += lattice.is_some() as usize;
-        self.lattice.push(lattice);
+        let c0 = self.colours.len();
         for k in 0..self.channels {
             self.colours.push(colour.get(k).copied().unwrap_or(0));
         }
+        let colour = &self.colours[c0..];
+        let points = &mut self.points;
+        points.push(p, lattice, colour);
+        let exact = lattice.map(|x| (&self.lines, x));
+        mirror_points(k, p, self.width, self.height, exact, |q, x| {
+            if let Some(q) = mesh::sanitize(q) {
+                points.push(q, x, colour);
+            }
+        });
         Ok(())
     }
 
@@ -282,40 +360,66 @@ impl SampleSet {
         &self.colours
     }
 
-    /// The Delaunay triangulation of all samples pushed so far (inserting pending ones).
-    /// Vertex data carry the sample index; of samples with equal positions only the first is a vertex.
+    /// The points the triangulation is built on (source pixels): every sample followed by its
+    /// mirror points (`spec/reconstruction.md`). [`Vertex::index`] and the cells index this.
+    ///
+    /// ```
+    /// let mut set = qcs::reconstruction::SampleSet::new(100, 100, 1);
+    /// set.push([50.0, 5.0], &[7]); // the first sample is mirrored across every edge
+    /// assert_eq!(set.points().len(), 9);
+    /// assert_eq!(set.points()[1], [50.0, -5.0]);
+    /// assert_eq!(set.point_colours(), &[7; 9]);
+    /// ```
+    pub fn points(&self) -> &[Point] {
+        &self.points.positions
+    }
+
+    /// The colour each of [`SampleSet::points`] carries (its sample's), `channels()` bytes each.
+    pub fn point_colours(&self) -> &[u8] {
+        &self.points.colours
+    }
+
+    /// The exact lattice point of each of [`SampleSet::points`], where it has one.
+    pub fn point_lattice(&self) -> &[Option<ZZeta>] {
+        &self.points.lattice
+    }
+
+    /// The Delaunay triangulation of all points ([`SampleSet::points`]) pushed so far
+    /// (inserting pending ones). Vertex data carry the point index; of points with equal
+    /// positions only the first is a vertex.
     ///
     /// ```
     /// use qcs::reconstruction::SampleSet;
     /// use spade::Triangulation;
-    /// let mut set = SampleSet::new(8, 8, 1);
-    /// for p in [[1.0, 1.0], [6.0, 1.0], [1.0, 6.0], [6.0, 6.0], [1.0, 1.0]] {
+    /// let mut set = SampleSet::new(80, 80, 1);
+    /// for p in [[30.0, 30.0], [50.0, 30.0], [30.0, 50.0], [50.0, 50.0], [30.0, 30.0]] {
     ///     set.push(p, &[0]);
     /// }
-    /// let t = set.triangulation();
-    /// assert_eq!((t.num_vertices(), t.num_inner_faces()), (4, 2));
+    /// // The first samples are mirrored: 4 + 4·8 points, the duplicate and its mirrors skipped.
+    /// assert_eq!(set.triangulation().num_vertices(), 36);
     /// ```
     pub fn triangulation(&mut self) -> &Triangulation {
-        mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
+        mesh::sync(&mut self.mesh, &self.points.positions, &mut self.synced);
         &self.mesh
     }
 
-    /// The canonical Delaunay cells of the samples, if every sample has an exact lattice
-    /// point (and there are at least three, not all collinear). Recomputed from the kept
-    /// triangulation when samples were added since the last call.
+    /// The canonical Delaunay cells of the points ([`SampleSet::points`]), if every sample
+    /// has an exact lattice point (and there are at least three points, not all collinear).
+    /// Recomputed from the kept triangulation when samples were added since the last call.
     pub fn cells(&mut self) -> Option<&Cells> {
         self.sync_cells();
         self.cells.as_ref().and_then(|(_, c)| c.as_ref())
     }
 
     fn sync_cells(&mut self) {
-        mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
-        let n = self.positions.len();
+        let pts = &self.points;
+        mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
+        let n = pts.positions.len();
         if self.cells.as_ref().map(|c| c.0) == Some(n) {
             return;
         }
-        let cells = if self.exact == n && n >= 3 {
-            Cells::build(&self.mesh, &self.lattice).filter(|c| !c.is_empty())
+        let cells = if pts.exact == n && n >= 3 {
+            Cells::build(&self.mesh, &pts.lattice).filter(|c| !c.is_empty())
         } else {
             None
         };
@@ -357,21 +461,22 @@ impl SampleSet {
         if method == Method::Gouraud {
             self.sync_cells();
         }
-        let frame = Frame {
+        let mut frame = Frame {
             width: w,
             height: h,
             channels: c,
-            colours: &self.colours,
+            colours: &self.points.colours,
             sx: self.width.max(1) as f64 / width as f64,
             sy: self.height.max(1) as f64 / height as f64,
         };
+        let pts = &self.points;
         match method {
             Method::Gouraud => {
                 let cells = self.cells.as_ref().and_then(|(_, c)| c.as_ref());
-                gouraud::render(&self.mesh, cells, &self.positions, &frame, options.parallel)
+                gouraud::render(&self.mesh, cells, &pts.positions, &frame, options.parallel)
             }
             Method::Natural => {
-                mesh::sync(&mut self.mesh, &self.positions, &mut self.synced);
+                mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
                 natural::render(&self.mesh, &frame, options.parallel)
             }
             Method::Shepard => {
@@ -382,6 +487,7 @@ impl SampleSet {
                     Some(g) => g,
                     None => return vec![128; w * h * c],
                 };
+                frame.colours = &self.colours;
                 shepard::render(grid, &frame, options.parallel)
             }
         }
@@ -533,8 +639,11 @@ mod tests {
         set.push([1.0, 6.0], &[10]);
         let _ = set.triangulation();
         set.push([1.0, 1.0], &[250]);
+        let before = set.points().len();
+        let colours = set.point_colours().to_vec();
         let t = set.triangulation();
-        assert_eq!(t.num_vertices(), 3);
-        assert!(t.vertices().all(|v| v.data().index < 3));
+        // The duplicate and its mirror points (same positions as the first's) are not vertices.
+        assert!(t.vertices().all(|v| (v.data().index as usize) < before));
+        assert!(t.vertices().all(|v| colours[v.data().index as usize] == 10));
     }
 }
