@@ -4,14 +4,13 @@
 //! ([`Cells`]): a cell with k ≥ 4 vertices is drawn as k triangles around its vertex centroid,
 //! whose colour is the mean of the k vertex colours (`spec/reconstruction.md`).
 
-use rayon::prelude::*;
 use spade::Triangulation as _;
 
 use super::cells::Cells;
 use super::hull::{colour_of, Boundary};
 use super::mesh::Triangulation;
-use super::raster::{self, Band, RasterTriangle, RasterVertex, Setup};
-use super::{band_rows, fill_unpainted, Frame};
+use super::raster::{self, Band, RasterTriangle, RasterVertex};
+use super::{fill_unpainted, Frame};
 use crate::sites::Point;
 
 /// The inner faces of `mesh` as [`RasterTriangle`]s in output pixels (positions multiplied by
@@ -76,6 +75,25 @@ pub fn cell_triangles(
     channels: usize,
     scale: [f64; 2],
 ) -> Vec<RasterTriangle> {
+    let mut out = Vec::with_capacity(positions.len() * 2 + 8);
+    for cell in cells.iter() {
+        cell_fan(cell, positions, colours, channels, scale, &mut |t| {
+            out.push(*t)
+        });
+    }
+    out
+}
+
+/// The triangles of one cell (see [`cell_triangles`]), given to `f` in order.
+#[inline]
+fn cell_fan(
+    cell: &[u32],
+    positions: &[Point],
+    colours: &[u8],
+    channels: usize,
+    scale: [f64; 2],
+    f: &mut dyn FnMut(&RasterTriangle),
+) {
     let vertex = |i: u32| {
         let p = positions.get(i as usize).copied().unwrap_or_default();
         RasterVertex {
@@ -83,42 +101,43 @@ pub fn cell_triangles(
             colour: colour_of(colours, channels, i as usize),
         }
     };
-    let mut out = Vec::with_capacity(positions.len() * 2 + 8);
-    for cell in cells.iter() {
-        let k = cell.len();
-        if k < 3 {
-            continue;
-        }
-        if k == 3 {
-            out.push([vertex(cell[0]), vertex(cell[1]), vertex(cell[2])]);
-            continue;
-        }
-        let mut sum_pos = [0f64; 2];
-        let mut sum_col = [0u32; 4];
-        for &i in cell {
-            let p = positions.get(i as usize).copied().unwrap_or_default();
-            sum_pos[0] += p[0];
-            sum_pos[1] += p[1];
-            if let Some(s) = colours.get(i as usize * channels..(i as usize + 1) * channels) {
-                for (acc, &v) in sum_col.iter_mut().zip(s) {
-                    *acc += v as u32;
-                }
+    let k = cell.len();
+    if k < 3 {
+        return;
+    }
+    if k == 3 {
+        f(&[vertex(cell[0]), vertex(cell[1]), vertex(cell[2])]);
+        return;
+    }
+    let mut sum_pos = [0f64; 2];
+    let mut sum_col = [0u32; 4];
+    for &i in cell {
+        let p = positions.get(i as usize).copied().unwrap_or_default();
+        sum_pos[0] += p[0];
+        sum_pos[1] += p[1];
+        if let Some(s) = colours.get(i as usize * channels..(i as usize + 1) * channels) {
+            for (acc, &v) in sum_col.iter_mut().zip(s) {
+                *acc += v as u32;
             }
         }
-        let kf = k as f64;
-        let centre = RasterVertex {
-            pos: [sum_pos[0] / kf * scale[0], sum_pos[1] / kf * scale[1]],
-            colour: sum_col.map(|v| v as f32 / k as f32),
-        };
-        for s in 0..k {
-            out.push([centre, vertex(cell[s]), vertex(cell[(s + 1) % k])]);
-        }
     }
-    out
+    let kf = k as f64;
+    let centre = RasterVertex {
+        pos: [sum_pos[0] / kf * scale[0], sum_pos[1] / kf * scale[1]],
+        colour: sum_col.map(|v| v as f32 / k as f32),
+    };
+    let mut prev = vertex(cell[0]);
+    for s in 0..k {
+        let next = vertex(cell[(s + 1) % k]);
+        f(&[centre, prev, next]);
+        prev = next;
+    }
 }
 
 /// Renders `mesh` by Gouraud shading into `frame`'s output: over the canonical `cells` when
-/// given (their vertices index `positions`), else over `mesh`'s own triangles.
+/// given (their vertices index `positions`), else over `mesh`'s own triangles. Each cell (or
+/// triangle) is set up afresh in every band of rows it touches, so nothing per triangle is
+/// kept in memory.
 pub(crate) fn render(
     mesh: &Triangulation,
     cells: Option<&Cells>,
@@ -127,14 +146,8 @@ pub(crate) fn render(
     parallel: bool,
 ) -> Vec<u8> {
     let (w, h, c) = (frame.width, frame.height, frame.channels);
-    let mut out = vec![0u8; w * h * c];
     let scale = [1.0 / frame.sx, 1.0 / frame.sy];
-    let tris = match cells {
-        Some(cells) => cell_triangles(cells, positions, frame.colours, c, scale),
-        None => triangles(mesh, frame.colours, c, scale),
-    };
-    let setups = raster::setups(&tris);
-    drop(tris);
+    let colours = frame.colours;
     let boundary = match cells {
         // The exact hull: sites that are exactly on a hull edge are boundary vertices.
         Some(cells) => {
@@ -148,55 +161,36 @@ pub(crate) fn render(
                     (pb, pa, b as usize, a as usize)
                 }
             });
-            Boundary::from_edges(edges, frame.colours, c)
+            Boundary::from_edges(edges, colours, c)
         }
-        None => Boundary::new(mesh, frame.colours, c),
+        None => Boundary::new(mesh, colours, c),
     };
-    if !parallel {
-        let mut painted = vec![false; w * h];
-        let mut band = Band {
-            width: w,
-            row0: 0,
-            rows: h,
-            channels: c,
-            pixels: &mut out,
-            painted: &mut painted,
-        };
-        raster::paint(&mut setups.iter(), &mut band);
-        fill_unpainted(&mut band, frame, &boundary);
-        return out;
-    }
-    let rows = band_rows(h);
-    let nbands = h.div_ceil(rows);
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nbands];
-    for (k, s) in setups.iter().enumerate() {
-        let (r0, r1) = s.rows;
-        if r1 < 0 || r0 >= h as i64 {
-            continue;
-        }
-        let b0 = r0.max(0) as usize / rows;
-        let b1 = (r1.min(h as i64 - 1) as usize) / rows;
-        for bin in &mut bins[b0..=b1] {
-            bin.push(k as u32);
-        }
-    }
-    out.par_chunks_mut(rows * w * c)
-        .zip(bins.par_iter())
-        .enumerate()
-        .for_each(|(b, (chunk, bin))| {
-            let n = chunk.len() / (w * c);
-            let mut painted = vec![false; n * w];
-            let mut band = Band {
-                width: w,
-                row0: b * rows,
-                rows: n,
-                channels: c,
-                pixels: chunk,
-                painted: &mut painted,
+    let finish = |band: &mut Band<'_>| fill_unpainted(band, frame, &boundary);
+    let y = |p: Point| p[1] * scale[1];
+    match cells {
+        Some(cells) => {
+            let extent = |k: usize| {
+                let cell = cells.get(k).unwrap_or(&[]);
+                let ys = cell.iter().map(|&i| y(positions[i as usize]));
+                ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v), b.max(v))
+                })
             };
-            let mut it = bin.iter().map(|&k| &setups[k as usize]);
-            raster::paint(&mut it as &mut dyn Iterator<Item = &Setup>, &mut band);
-            fill_unpainted(&mut band, frame, &boundary);
-        });
-    out
+            let emit = |k: usize, f: &mut dyn FnMut(&RasterTriangle)| {
+                if let Some(cell) = cells.get(k) {
+                    cell_fan(cell, positions, colours, c, scale, f);
+                }
+            };
+            raster::paint_groups(cells.len(), extent, emit, (w, h, c), parallel, finish)
+        }
+        None => {
+            let tris = triangles(mesh, colours, c, scale);
+            let extent = |k: usize| {
+                let ys = tris[k].map(|v| v.pos[1]);
+                (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]))
+            };
+            let emit = |k: usize, f: &mut dyn FnMut(&RasterTriangle)| f(&tris[k]);
+            raster::paint_groups(tris.len(), extent, emit, (w, h, c), parallel, finish)
+        }
+    }
 }

@@ -304,44 +304,134 @@ fn band_rows(s: &Setup, row0: usize, rows: usize) -> (i64, i64) {
     (lo, hi)
 }
 
-fn paint_c<const C: usize>(setups: &mut dyn Iterator<Item = &Setup>, band: &mut Band<'_>) {
+#[inline]
+fn paint_c<const C: usize>(s: &Setup, band: &mut Band<'_>) {
     let w = band.width;
-    for s in setups {
-        let (r0, r1) = band_rows(s, band.row0, band.rows);
-        for j in r0..r1 {
-            let (i0, i1) = s.span(j, w as i64);
-            if i0 >= i1 {
-                continue;
+    let (r0, r1) = band_rows(s, band.row0, band.rows);
+    for j in r0..r1 {
+        let (i0, i1) = s.span(j, w as i64);
+        if i0 >= i1 {
+            continue;
+        }
+        let (mut v, g) = s.start::<C>(i0, j);
+        let row = j as usize - band.row0;
+        let base = row * w;
+        let px = &mut band.pixels[(base + i0 as usize) * C..(base + i1 as usize) * C];
+        for p in px.chunks_exact_mut(C) {
+            for k in 0..C {
+                // Saturating float → int cast: rounds half up and clamps to 0..=255.
+                p[k] = (v[k] + 0.5) as u8;
+                v[k] += g[k];
             }
-            let (mut v, g) = s.start::<C>(i0, j);
-            let row = j as usize - band.row0;
-            let base = row * w;
-            let px = &mut band.pixels[(base + i0 as usize) * C..(base + i1 as usize) * C];
-            for p in px.chunks_exact_mut(C) {
-                for k in 0..C {
-                    // Saturating float → int cast: rounds half up and clamps to 0..=255.
-                    p[k] = (v[k] + 0.5) as u8;
-                    v[k] += g[k];
-                }
-            }
-            band.painted[base + i0 as usize..base + i1 as usize].fill(true);
+        }
+        band.painted[base + i0 as usize..base + i1 as usize].fill(true);
+    }
+}
+
+/// Paints the pixels of `band` covered by triangle `t` and marks them painted.
+#[inline]
+pub(crate) fn paint(t: &RasterTriangle, band: &mut Band<'_>) {
+    let Some(s) = Setup::new(t) else {
+        return;
+    };
+    match band.channels {
+        1 => paint_c::<1>(&s, band),
+        2 => paint_c::<2>(&s, band),
+        3 => paint_c::<3>(&s, band),
+        _ => paint_c::<4>(&s, band),
+    }
+}
+
+/// Output rows per band of [`paint_groups`]: 32 rows of a 1024-pixel RGB picture are 96 KiB,
+/// so a band's pixels stay in cache while its triangles are drawn.
+const BAND: usize = 32;
+
+/// Paints a `width × height × channels` picture from groups of triangles (e.g. the fan of a
+/// Delaunay cell), band by band: each group is binned by the rows its vertices span
+/// (`y_extent`, output pixels), then each band draws the triangles `emit` gives for its
+/// groups, in group order, and `finish` paints what no triangle claimed. Bands run on the
+/// `rayon` pool when `parallel`; the picture is the same either way.
+pub(crate) fn paint_groups<E, Y, F>(
+    groups: usize,
+    y_extent: Y,
+    emit: E,
+    (width, height, channels): (usize, usize, usize),
+    parallel: bool,
+    finish: F,
+) -> Vec<u8>
+where
+    Y: Fn(usize) -> (f64, f64),
+    E: Fn(usize, &mut dyn FnMut(&RasterTriangle)) + Sync,
+    F: Fn(&mut Band<'_>) + Sync,
+{
+    let (w, h, c) = (width, height, channels);
+    let mut out = vec![0u8; w * h * c];
+    if w == 0 || h == 0 {
+        return out;
+    }
+    let nbands = h.div_ceil(BAND);
+    // Counting sort of the groups into the bands they touch.
+    let span = |g: usize| {
+        let (y0, y1) = y_extent(g);
+        let m = 1e-7 * (1.0 + y0.abs().max(y1.abs()));
+        let r0 = ceil_i64(y0 - 0.5 - m).max(0);
+        let r1 = floor_i64(y1 - 0.5 + m).min(h as i64 - 1);
+        (r0 <= r1).then_some((r0 as usize / BAND, r1.max(0) as usize / BAND))
+    };
+    let spans: Vec<Option<(usize, usize)>> = (0..groups).map(span).collect();
+    let mut start = vec![0u32; nbands + 1];
+    for (b0, b1) in spans.iter().flatten() {
+        for b in *b0..=*b1 {
+            start[b + 1] += 1;
         }
     }
-}
-
-/// Paints every pixel of `band` covered by one of `setups` and marks it painted.
-pub(crate) fn paint(setups: &mut dyn Iterator<Item = &Setup>, band: &mut Band<'_>) {
-    match band.channels {
-        1 => paint_c::<1>(setups, band),
-        2 => paint_c::<2>(setups, band),
-        3 => paint_c::<3>(setups, band),
-        _ => paint_c::<4>(setups, band),
+    for b in 0..nbands {
+        start[b + 1] += start[b];
     }
+    let mut fill = start.clone();
+    let mut bins = vec![0u32; start[nbands] as usize];
+    for (g, s) in spans.iter().enumerate() {
+        if let Some((b0, b1)) = s {
+            for b in *b0..=*b1 {
+                bins[fill[b] as usize] = g as u32;
+                fill[b] += 1;
+            }
+        }
+    }
+    drop(spans);
+    let run = |b: usize, chunk: &mut [u8]| {
+        let rows = chunk.len() / (w * c);
+        let mut painted = vec![false; rows * w];
+        let mut band = Band {
+            width: w,
+            row0: b * BAND,
+            rows,
+            channels: c,
+            pixels: chunk,
+            painted: &mut painted,
+        };
+        for &g in &bins[start[b] as usize..start[b + 1] as usize] {
+            emit(g as usize, &mut |t| paint(t, &mut band));
+        }
+        finish(&mut band);
+    };
+    if parallel {
+        use rayon::prelude::*;
+        out.par_chunks_mut(BAND * w * c)
+            .enumerate()
+            .for_each(|(b, chunk)| run(b, chunk));
+    } else {
+        for (b, chunk) in out.chunks_mut(BAND * w * c).enumerate() {
+            run(b, chunk);
+        }
+    }
+    out
 }
 
-/// Prepares triangles for scanning, dropping degenerate ones.
-pub(crate) fn setups(triangles: &[RasterTriangle]) -> Vec<Setup> {
-    triangles.iter().filter_map(Setup::new).collect()
+/// The y extent of a triangle.
+fn y_extent(t: &RasterTriangle) -> (f64, f64) {
+    let ys = t.map(|v| v.pos[1]);
+    (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]))
 }
 
 /// How many triangles claim each pixel of a `width × height` output (row-major).
@@ -360,7 +450,7 @@ pub(crate) fn setups(triangles: &[RasterTriangle]) -> Vec<Setup> {
 pub fn raster_coverage(triangles: &[RasterTriangle], width: u32, height: u32) -> Vec<u32> {
     let (w, h) = (width as usize, height as usize);
     let mut count = vec![0u32; w.saturating_mul(h)];
-    for s in setups(triangles) {
+    for s in triangles.iter().filter_map(Setup::new) {
         let (r0, r1) = band_rows(&s, 0, h);
         for j in r0..r1 {
             let (i0, i1) = s.span(j, w as i64);
@@ -392,17 +482,19 @@ pub fn rasterise(
 ) -> (Vec<u8>, Vec<bool>) {
     let c = channels.clamp(1, 4);
     let (w, h) = (width as usize, height as usize);
-    let mut pixels = vec![0u8; w.saturating_mul(h).saturating_mul(c)];
-    let mut painted = vec![false; w.saturating_mul(h)];
-    let s = setups(triangles);
-    let mut band = Band {
-        width: w,
-        row0: 0,
-        rows: h,
-        channels: c,
-        pixels: &mut pixels,
-        painted: &mut painted,
-    };
-    paint(&mut s.iter(), &mut band);
+    let painted = std::sync::Mutex::new(vec![false; w.saturating_mul(h)]);
+    let pixels = paint_groups(
+        triangles.len(),
+        |k| y_extent(&triangles[k]),
+        |k, f| f(&triangles[k]),
+        (w, h, c),
+        false,
+        |band| {
+            let mut all = painted.lock().unwrap_or_else(|e| e.into_inner());
+            let at = band.row0 * band.width;
+            all[at..at + band.painted.len()].copy_from_slice(band.painted);
+        },
+    );
+    let painted = painted.into_inner().unwrap_or_else(|e| e.into_inner());
     (pixels, painted)
 }
