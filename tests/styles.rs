@@ -489,3 +489,56 @@ fn canonical_cells_merge_cocircular_triangles_only() {
     let dup = [[1.0, 1.0], [1.0, 1.0], [5.0, 1.0], [1.0, 5.0]];
     assert_eq!(styles::Triangulation::new(&dup).unwrap().cells().len(), 1);
 }
+
+#[test]
+fn quasicrystal_cells_are_exact_and_match_the_tolerant_merge() {
+    use qcs::styles::{Sites, Triangulation};
+    // Cells as sorted vertex lists, without the zero-area slivers of collinear hull sites
+    // that the tolerant merge keeps (the exact cells drop them).
+    let norm = |cells: Vec<Vec<usize>>, pos: &[[f64; 2]]| {
+        let area = |c: &[usize]| {
+            let k = c.len();
+            (0..k)
+                .map(|i| {
+                    let (a, b) = (pos[c[i]], pos[c[(i + 1) % k]]);
+                    a[0] * b[1] - a[1] * b[0]
+                })
+                .sum::<f64>()
+                .abs()
+        };
+        let mut v: Vec<Vec<usize>> = cells
+            .into_iter()
+            .filter(|c| area(c) > 1e-6)
+            .map(|mut c| {
+                c.sort_unstable();
+                c
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    for (w, h, n) in [(64, 64, 300), (120, 80, 1500), (200, 30, 900)] {
+        let sites = qcs::sites::Quasicrystal::new(w, h).unwrap().first(n);
+        let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
+        let lat: Vec<_> = sites.iter().map(|s| s.lattice).collect();
+        let exact = Triangulation::of(Sites::exact(&pos, &lat)).unwrap();
+        let tolerant = Triangulation::of(&pos).unwrap();
+        assert!(exact.is_exact() && !tolerant.is_exact());
+        let cells = exact.cells();
+        assert!(cells.iter().any(|c| c.len() == 4) && cells.iter().any(|c| c.len() == 5));
+        assert_eq!(
+            norm(cells, &pos),
+            norm(tolerant.cells(), &pos),
+            "{w}×{h}, {n}"
+        );
+        // The wireframe: every cell edge once, no diagonal inside a cell.
+        let edges = exact.edges();
+        let sides: usize = exact.cells().iter().map(|c| c.len()).sum();
+        assert!(edges.len() < sides && edges.windows(2).all(|e| e[0] < e[1]));
+        for c in exact.cells().iter().filter(|c| c.len() >= 4) {
+            assert!(edges
+                .binary_search(&[c[0].min(c[2]), c[0].max(c[2])])
+                .is_err());
+        }
+    }
+}

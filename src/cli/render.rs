@@ -3,8 +3,10 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use qcs::lattice::ZZeta;
+use qcs::reconstruction::SampleSet;
 use qcs::sampling::{SampleColour, SourceImage};
-use qcs::sites::Point;
+use qcs::sites::{Frame, Point};
 use qcs::{styles, Method, StreamDecoder};
 use std::path::PathBuf;
 
@@ -42,8 +44,41 @@ pub struct RenderArgs {
     pub seed: u64,
 }
 
-/// Positions and RGB colours of the samples, and the source size.
-type Samples = (Vec<Point>, Vec<u8>, (u32, u32));
+/// The samples to draw: positions, RGB colours, the source size and, for quasicrystal
+/// sites, their lattice points and frame (so cells are exact and Gouraud is the decoder's).
+struct Samples {
+    pos: Vec<Point>,
+    col: Vec<u8>,
+    source: (u32, u32),
+    exact: Option<(Vec<ZZeta>, Frame)>,
+}
+
+impl Samples {
+    fn sites(&self) -> styles::Sites<'_> {
+        match &self.exact {
+            Some((lattice, _)) => styles::Sites::exact(&self.pos, lattice),
+            None => self.pos.as_slice().into(),
+        }
+    }
+
+    /// The Gouraud picture of the samples at `size`, as the decoder draws it.
+    fn gouraud(&self, size: (u32, u32)) -> image::RgbImage {
+        let (w, h) = self.source;
+        let mut set = SampleSet::new(w, h, 3);
+        if let Some((_, frame)) = &self.exact {
+            set = set.with_frame(*frame);
+        }
+        for (k, p) in self.pos.iter().enumerate() {
+            let c = &self.col[3 * k..3 * k + 3];
+            match &self.exact {
+                Some((lattice, _)) => set.push_exact(*p, lattice[k], c),
+                None => set.push(*p, c),
+            }
+        }
+        let px = set.render(Method::Gouraud, size.0, size.1);
+        image::RgbImage::from_raw(size.0, size.1, px).expect("render size")
+    }
+}
 
 fn samples(a: &RenderArgs) -> Result<Samples> {
     let bytes =
@@ -55,6 +90,16 @@ fn samples(a: &RenderArgs) -> Result<Samples> {
         let h = d.header().cloned().ok_or(qcs::Error::NeedMoreData)?;
         let c = h.layout.channels() as usize;
         let k = a.samples.map_or(u64::MAX, |n| n as u64);
+        let frame = qcs::sites::Quasicrystal::with_frame(
+            h.width,
+            h.height,
+            h.lattice
+                .map_or(Frame::default_for(h.width, h.height), |l| Frame {
+                    root_len: l.root_length,
+                    origin: [l.origin_x, l.origin_y],
+                }),
+        )?
+        .frame();
         let (pos, col) = d.samples(k);
         let rgb = col
             .chunks_exact(c)
@@ -66,11 +111,12 @@ fn samples(a: &RenderArgs) -> Result<Samples> {
                 }
             })
             .collect();
-        return Ok((
-            pos.iter().map(|s| s.pos).collect(),
-            rgb,
-            (h.width, h.height),
-        ));
+        return Ok(Samples {
+            pos: pos.iter().map(|s| s.pos).collect(),
+            col: rgb,
+            source: (h.width, h.height),
+            exact: Some((pos.iter().map(|s| s.lattice).collect(), frame)),
+        });
     }
     let img = image::load_from_memory(&bytes)
         .with_context(|| format!("cannot read image {}", a.input.display()))?
@@ -80,9 +126,24 @@ fn samples(a: &RenderArgs) -> Result<Samples> {
     let Some(sampler) = super::sampler_by_name(&a.sampler, a.seed) else {
         bail!("unknown sampler {:?}", a.sampler);
     };
-    let pos = sampler.sites(w, h, n);
+    let (pos, exact) = if a.sampler == "quasicrystal" {
+        let seq = qcs::sites::Quasicrystal::new(w, h)?;
+        let sites = seq.first(n);
+        let lattice = sites.iter().map(|s| s.lattice).collect();
+        (
+            sites.iter().map(|s| s.pos).collect(),
+            Some((lattice, seq.frame())),
+        )
+    } else {
+        (sampler.sites(w, h, n), None)
+    };
     let col = SourceImage::new(img.as_raw(), w, h, 3)?.colours(&pos, SampleColour::Area, n);
-    Ok((pos, col, (w, h)))
+    Ok(Samples {
+        pos,
+        col,
+        source: (w, h),
+        exact,
+    })
 }
 
 pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
@@ -99,22 +160,19 @@ pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
         both.save(&a.output).with_context(save_err)?;
         return Ok(());
     }
-    let (pos, col, source) = samples(&a)?;
+    let samples = samples(&a)?;
+    let (pos, col, source) = (&samples.pos, &samples.col, samples.source);
     let size = a.size.unwrap_or(source);
+    let sites = samples.sites();
     let img = match a.style {
-        Style::Mosaic => styles::mosaic(&pos, &col, source, size)?,
-        Style::Strokes => styles::strokes(&pos, &col, source, size)?,
-        Style::Voronoi => styles::voronoi(&pos, &col, source, size)?,
-        Style::Delaunay => {
-            let bg =
-                qcs::reconstruction::render(source, 3, &pos, &col, Method::Gouraud, size.0, size.1);
-            let bg = image::RgbImage::from_raw(size.0, size.1, bg).expect("render size");
-            styles::delaunay_over(&pos, source, &bg)?
-        }
-        Style::Sites => styles::order(&pos, source, size)?,
+        Style::Mosaic => styles::mosaic(sites, col, source, size)?,
+        Style::Strokes => styles::strokes(sites, col, source, size)?,
+        Style::Voronoi => styles::voronoi(sites, col, source, size)?,
+        Style::Delaunay => styles::delaunay_over(sites, source, &samples.gouraud(size))?,
+        Style::Sites => styles::order(pos, source, size)?,
         Style::Spectrum => {
             let n = size.0.max(size.1).clamp(16, 2048) as usize;
-            image::DynamicImage::ImageLuma8(styles::spectrum(&pos, source, n)?).to_rgb8()
+            image::DynamicImage::ImageLuma8(styles::spectrum(pos, source, n)?).to_rgb8()
         }
         Style::Phase => unreachable!("handled above"),
     };

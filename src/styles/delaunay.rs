@@ -2,8 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, draw_line, Frame, Triangulation, INK};
-use crate::sites::Point;
+use super::{check, draw_line, Frame, Sites, Triangulation, INK};
 use crate::Result;
 
 /// The Delaunay edges (dark, 1 px) on a white background.
@@ -14,14 +13,16 @@ use crate::Result;
 /// assert_eq!(img.get_pixel(5, 1).0, qcs::styles::INK);
 /// assert_eq!(img.get_pixel(5, 5).0, [255, 255, 255]);
 /// ```
-pub fn delaunay_graph(
-    positions: &[Point],
+pub fn delaunay_graph<'a>(
+    sites: impl Into<Sites<'a>>,
     source: (u32, u32),
     output: (u32, u32),
 ) -> Result<RgbImage> {
+    let sites = sites.into();
+    let positions = sites.positions();
     check(positions, None, source, output)?;
     let background = RgbImage::from_pixel(output.0, output.1, Rgb([255, 255, 255]));
-    delaunay_over(positions, source, &background)
+    delaunay_over(sites, source, &background)
 }
 
 /// The Delaunay edges drawn over `background` (the source image, a
@@ -34,11 +35,13 @@ pub fn delaunay_graph(
 /// assert_eq!(img.get_pixel(10, 10).0, [10, 200, 10]);
 /// assert_eq!(img.get_pixel(10, 2).0, qcs::styles::INK);
 /// ```
-pub fn delaunay_over(
-    positions: &[Point],
+pub fn delaunay_over<'a>(
+    sites: impl Into<Sites<'a>>,
     source: (u32, u32),
     background: &RgbImage,
 ) -> Result<RgbImage> {
+    let sites = sites.into();
+    let positions = sites.positions();
     let output = background.dimensions();
     check(positions, None, source, output)?;
     let frame = Frame::new(source, output);
@@ -46,7 +49,7 @@ pub fn delaunay_over(
     if positions.len() < 2 {
         return Ok(img);
     }
-    let tri = Triangulation::new(positions)?;
+    let tri = Triangulation::of(sites)?;
     for [a, b] in tri.edges() {
         draw_line(
             &mut img,

@@ -10,9 +10,10 @@
 //! non-finite positions or outputs over [`crate::Limits::default`]'s
 //! `max_output_pixels` give [`crate::Error::Parameter`] / [`crate::Error::Limits`].
 //!
-//! The triangle-based styles draw the cells of [`Triangulation::cells`], today
-//! the Delaunay triangles; a later step replaces that one function by canonical
-//! cells (cocircular triangles merged into polygons), and the styles follow.
+//! The cell-based styles (mosaic, strokes, the Delaunay wireframe) draw the cells of
+//! [`Triangulation::cells`]: the canonical Delaunay cells, cocircular triangles merged into
+//! polygons, decided exactly for quasicrystal sites given with their lattice points
+//! ([`Sites::exact`]), and with a relative tolerance of 1e−9 for other sites.
 //!
 //! ```
 //! use qcs::sites::{Sampler, strategies::Periodic};
@@ -40,8 +41,67 @@ pub use voronoi::voronoi;
 
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation as _};
 
+use crate::lattice::ZZeta;
+use crate::reconstruction::{Cells, Triangulation as Mesh, Vertex};
 use crate::sites::Point;
 use crate::{Error, Result};
+
+/// The sites a style draws: positions in source pixels and, for quasicrystal sites, their
+/// exact lattice points. Plain position slices convert into it.
+///
+/// ```
+/// use qcs::sites::Quasicrystal;
+/// use qcs::styles::{Sites, Triangulation};
+/// let sites = Quasicrystal::new(64, 64)?.first(300);
+/// let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
+/// let lat: Vec<_> = sites.iter().map(|s| s.lattice).collect();
+/// let exact = Triangulation::of(Sites::exact(&pos, &lat))?;
+/// assert!(exact.is_exact() && !Triangulation::of(&pos)?.is_exact());
+/// assert!(exact.cells().iter().any(|c| c.len() == 5)); // pentagons
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct Sites<'a> {
+    positions: &'a [Point],
+    lattice: Option<&'a [ZZeta]>,
+}
+
+impl<'a> Sites<'a> {
+    /// Sites with their lattice points (`lattice[k]` is the point of `positions[k]`, in any
+    /// frame: cells only depend on orientation and incircle signs, which a frame keeps).
+    pub fn exact(positions: &'a [Point], lattice: &'a [ZZeta]) -> Self {
+        Sites {
+            positions,
+            lattice: Some(lattice),
+        }
+    }
+
+    /// The positions.
+    pub fn positions(&self) -> &'a [Point] {
+        self.positions
+    }
+}
+
+impl<'a> From<&'a [Point]> for Sites<'a> {
+    fn from(positions: &'a [Point]) -> Self {
+        Sites {
+            positions,
+            lattice: None,
+        }
+    }
+}
+
+impl<'a> From<&'a Vec<Point>> for Sites<'a> {
+    fn from(positions: &'a Vec<Point>) -> Self {
+        positions.as_slice().into()
+    }
+}
+
+impl<'a, const N: usize> From<&'a [Point; N]> for Sites<'a> {
+    fn from(positions: &'a [Point; N]) -> Self {
+        positions.as_slice().into()
+    }
+}
 
 /// Colour of grout, edges and lines.
 pub const INK: [u8; 3] = [24, 24, 24];
@@ -59,7 +119,8 @@ impl HasPosition for Site {
     }
 }
 
-/// The Delaunay triangulation of a site set, keeping each vertex's site index.
+/// The Delaunay triangulation of a site set, keeping each vertex's site index, and its
+/// canonical cells.
 ///
 /// Sites at an identical position are merged (the first kept is one of them).
 ///
@@ -67,14 +128,47 @@ impl HasPosition for Site {
 /// let t = qcs::styles::Triangulation::new(&[[0.0, 0.0], [4.0, 0.0], [0.0, 4.0], [4.0, 4.0]]).unwrap();
 /// assert_eq!(t.cells().len(), 1); // the square is one canonical cell
 /// assert_eq!(t.triangles().len(), 2);
-/// assert_eq!(t.edges().len(), 5);
+/// assert_eq!(t.edges().len(), 4); // the square's sides, not its diagonal
 /// assert_eq!(t.nearest([3.9, 0.2]), Some(1));
 /// ```
 pub struct Triangulation {
     mesh: DelaunayTriangulation<Site>,
+    /// The exact canonical cells, for sites with lattice points.
+    exact: Option<Vec<Vec<usize>>>,
 }
 
 impl Triangulation {
+    /// Triangulates `sites`; with lattice points ([`Sites::exact`]) the cells are decided by
+    /// the exact predicates ([`Cells`]), as Gouraud draws them.
+    pub fn of<'a>(sites: impl Into<Sites<'a>>) -> Result<Self> {
+        let sites = sites.into();
+        let mut t = Triangulation::new(sites.positions)?;
+        if let Some(lattice) = sites.lattice.filter(|l| l.len() == sites.positions.len()) {
+            let vertices: Vec<Vertex> = t
+                .mesh
+                .vertices()
+                .map(|v| Vertex {
+                    position: v.position(),
+                    index: v.data().index as u32,
+                })
+                .collect();
+            let points: Vec<Option<ZZeta>> = lattice.iter().copied().map(Some).collect();
+            let mesh = Mesh::bulk_load_stable(vertices)
+                .map_err(|e| Error::Parameter(format!("triangulation failed: {e}")))?;
+            t.exact = Cells::build(&mesh, &points).map(|c| {
+                c.iter()
+                    .map(|c| c.iter().map(|&i| i as usize).collect())
+                    .collect()
+            });
+        }
+        Ok(t)
+    }
+
+    /// Whether the cells are the exact ones (sites with lattice points).
+    pub fn is_exact(&self) -> bool {
+        self.exact.is_some()
+    }
+
     /// Triangulates `positions`; fails on non-finite or out-of-range coordinates.
     pub fn new(positions: &[Point]) -> Result<Self> {
         let sites: Vec<Site> = positions
@@ -92,19 +186,22 @@ impl Triangulation {
         }
         let mesh = DelaunayTriangulation::bulk_load(sites)
             .map_err(|e| Error::Parameter(format!("triangulation failed: {e}")))?;
-        Ok(Triangulation { mesh })
+        Ok(Triangulation { mesh, exact: None })
     }
 
-    /// The cells to draw, each a convex polygon of site indices in angular
-    /// order around the cell's circumcentre.
+    /// The cells to draw, each a convex polygon of site indices in boundary order.
     ///
     /// These are the *canonical cells* of the Delaunay triangulation: adjacent
-    /// triangles whose four sites are cocircular (relative tolerance 1e−9) are
-    /// merged into one inscribed polygon, so that a square of a periodic grid or a
-    /// pentagon of a quasicrystal is one cell whatever diagonals the triangulator
-    /// chose. Elsewhere the cells are the Delaunay triangles. This is the single
-    /// place that decides what the styles draw.
+    /// triangles whose four sites are cocircular are merged into one inscribed polygon, so
+    /// that a square of a periodic grid or a pentagon of a quasicrystal is one cell whatever
+    /// diagonals the triangulator chose. Cocircularity is exact for sites with lattice
+    /// points ([`Triangulation::of`]), else within a relative tolerance of 1e−9. Elsewhere
+    /// the cells are the Delaunay triangles. This is the single place that decides what the
+    /// styles draw.
     pub fn cells(&self) -> Vec<Vec<usize>> {
+        if let Some(cells) = &self.exact {
+            return cells.clone();
+        }
         let faces: Vec<_> = self.mesh.inner_faces().collect();
         let nf = self.mesh.all_faces().len();
         let mut parent: Vec<usize> = (0..nf).collect();
@@ -186,15 +283,19 @@ impl Triangulation {
         out
     }
 
-    /// The Delaunay edges as pairs of site indices.
+    /// The edges of the cells as pairs of site indices (`a < b`, sorted): the Delaunay edges
+    /// without the diagonals a triangulator draws inside cocircular cells.
     pub fn edges(&self) -> Vec<[usize; 2]> {
-        self.mesh
-            .undirected_edges()
-            .map(|e| {
-                let [a, b] = e.vertices();
-                [a.data().index, b.data().index]
-            })
-            .collect()
+        let mut out: Vec<[usize; 2]> = Vec::new();
+        for cell in self.cells() {
+            for k in 0..cell.len() {
+                let (a, b) = (cell[k], cell[(k + 1) % cell.len()]);
+                out.push([a.min(b), a.max(b)]);
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
     }
 
     /// Index of the site nearest to `p` (`None` for an empty set).

@@ -2,8 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, colour, fill_convex, fill_uncovered, Frame, Triangulation, INK};
-use crate::sites::Point;
+use super::{check, colour, fill_convex, fill_uncovered, Frame, Sites, Triangulation, INK};
 use crate::Result;
 
 /// Mosaic: every cell is split at its edge midpoints; the triangle at each
@@ -19,12 +18,14 @@ use crate::Result;
 /// let img = qcs::styles::mosaic(&sites, &colours, (10, 10), (10, 10)).unwrap();
 /// assert_eq!(img.get_pixel(1, 1).0, [255, 0, 0]);
 /// ```
-pub fn mosaic(
-    positions: &[Point],
+pub fn mosaic<'a>(
+    sites: impl Into<Sites<'a>>,
     colours: &[u8],
     source: (u32, u32),
     output: (u32, u32),
 ) -> Result<RgbImage> {
+    let sites = sites.into();
+    let positions = sites.positions();
     check(positions, Some(colours), source, output)?;
     let frame = Frame::new(source, output);
     let mut img = RgbImage::new(output.0, output.1);
@@ -32,7 +33,7 @@ pub fn mosaic(
     if positions.is_empty() {
         return Ok(img);
     }
-    let tri = Triangulation::new(positions)?;
+    let tri = Triangulation::of(sites)?;
     for cell in tri.cells() {
         let n = cell.len();
         let pts: Vec<[f64; 2]> = cell.iter().map(|&k| frame.to_out(positions[k])).collect();

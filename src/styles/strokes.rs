@@ -2,8 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, colour, fill_convex, fill_uncovered, Frame, Triangulation};
-use crate::sites::Point;
+use super::{check, colour, fill_convex, fill_uncovered, Frame, Sites, Triangulation};
 use crate::Result;
 
 /// The sharpness [`strokes`] uses.
@@ -17,13 +16,13 @@ pub const DEFAULT_SHARPNESS: f64 = 4.0;
 /// let img = qcs::styles::strokes(&sites, &colours, (20, 20), (20, 20)).unwrap();
 /// assert!(img.get_pixel(1, 10).0[0] < 20); // near the black sites: black
 /// ```
-pub fn strokes(
-    positions: &[Point],
+pub fn strokes<'a>(
+    sites: impl Into<Sites<'a>>,
     colours: &[u8],
     source: (u32, u32),
     output: (u32, u32),
 ) -> Result<RgbImage> {
-    strokes_with(positions, colours, source, output, DEFAULT_SHARPNESS)
+    strokes_with(sites, colours, source, output, DEFAULT_SHARPNESS)
 }
 
 /// Paint strokes: geometric subdivision of each cell plus nonlinear interpolation.
@@ -45,13 +44,15 @@ pub fn strokes(
 /// let sharp = qcs::styles::strokes_with(&sites, &colours, (20, 20), (20, 20), 8.0).unwrap();
 /// assert!(sharp.get_pixel(3, 3).0[0] > flat.get_pixel(3, 3).0[0]);
 /// ```
-pub fn strokes_with(
-    positions: &[Point],
+pub fn strokes_with<'a>(
+    sites: impl Into<Sites<'a>>,
     colours: &[u8],
     source: (u32, u32),
     output: (u32, u32),
     sharpness: f64,
 ) -> Result<RgbImage> {
+    let sites = sites.into();
+    let positions = sites.positions();
     check(positions, Some(colours), source, output)?;
     let s = if sharpness.is_finite() {
         sharpness.clamp(1.0, 64.0)
@@ -64,7 +65,7 @@ pub fn strokes_with(
     if positions.is_empty() {
         return Ok(img);
     }
-    let tri = Triangulation::new(positions)?;
+    let tri = Triangulation::of(sites)?;
     for t in tri.triangles() {
         let p = t.map(|k| frame.to_out(positions[k]));
         let c = t.map(|k| colour(colours, k));

@@ -2,8 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, colour, Frame, Triangulation, INK};
-use crate::sites::Point;
+use super::{check, colour, Frame, Sites, Triangulation, INK};
 use crate::Result;
 
 /// Voronoi diagram: each output pixel takes the colour of its nearest site, and
@@ -17,19 +16,21 @@ use crate::Result;
 /// assert_eq!(img.get_pixel(8, 5).0, [0, 0, 255]);
 /// assert_eq!(img.get_pixel(4, 5).0, qcs::styles::INK);
 /// ```
-pub fn voronoi(
-    positions: &[Point],
+pub fn voronoi<'a>(
+    sites: impl Into<Sites<'a>>,
     colours: &[u8],
     source: (u32, u32),
     output: (u32, u32),
 ) -> Result<RgbImage> {
+    let sites = sites.into();
+    let positions = sites.positions();
     check(positions, Some(colours), source, output)?;
     let frame = Frame::new(source, output);
     let mut img = RgbImage::new(output.0, output.1);
     if positions.is_empty() {
         return Ok(img);
     }
-    let tri = Triangulation::new(positions)?;
+    let tri = Triangulation::of(sites)?;
     let (w, h) = (output.0 as usize, output.1 as usize);
     let mut owner = vec![0usize; w * h];
     for j in 0..h {
