@@ -612,3 +612,35 @@ fn spec_worked_example() {
     // spade's split (a fan) draws another picture.
     assert_ne!(plain.render(Method::Gouraud, 32, 32), img);
 }
+
+#[test]
+fn cells_update_locally_as_samples_arrive() {
+    // Growing a set chunk by chunk (as the streaming decoder does) gives exactly the cells
+    // of a set built at once, and inserts the new points locally once the hull is settled.
+    for (w, h, total) in [(96u32, 64u32, 1500usize), (200, 40, 1200), (50, 50, 700)] {
+        let all = sites(w, h, total);
+        let mut live = SampleSet::new(w, h, 1);
+        let mut pushed = 0;
+        let mut rng = Rng(w as u64);
+        let mut renders = 0;
+        while pushed < total {
+            let step = (1 + rng.below(60) as usize).min(total - pushed);
+            for s in &all[pushed..pushed + step] {
+                live.push_exact(s.pos, s.lattice, &[0]);
+            }
+            pushed += step;
+            let mut fresh = SampleSet::new(w, h, 1);
+            for s in &all[..pushed] {
+                fresh.push_exact(s.pos, s.lattice, &[0]);
+            }
+            let lat: Vec<ZZeta> = live.point_lattice().iter().map(|x| x.unwrap()).collect();
+            let a = canonical(live.cells().expect("cells"), &lat);
+            let b = canonical(fresh.cells().expect("cells"), &lat);
+            assert!(a == b, "{w}×{h} after {pushed} samples");
+            renders += 1;
+        }
+        let rebuilds = live.cell_rebuilds();
+        eprintln!("{w}×{h}: {renders} updates, {rebuilds} rebuilds");
+        assert!(rebuilds * 4 < renders, "{rebuilds} of {renders}");
+    }
+}

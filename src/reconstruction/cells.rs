@@ -77,18 +77,8 @@ impl Cells {
     /// assert_eq!(cells.get(0), Some(&[4u32, 0, 1, 2, 3][..]));
     /// ```
     pub fn build(mesh: &Triangulation, lattice: &[Option<ZZeta>]) -> Option<Cells> {
-        let point = |i: u32| lattice.get(i as usize).copied().flatten();
-        for v in mesh.vertices() {
-            if !point(v.data().index).is_some_and(crate::lattice::within_exact_limit) {
-                return None;
-            }
-        }
-        // Every lattice point was checked above, so this lookup cannot fail.
-        let pt = |i: u32| point(i).unwrap_or(ZZeta([0; 4]));
-        let mut m = Mesh::new(mesh)?;
-        m.remove_slivers(&pt)?;
-        let (flips, merge) = m.lawson(&pt)?;
-        Some(m.cells(&pt, flips, &merge))
+        let live = LiveCells::build(mesh, lattice)?;
+        Some(live.cells(lattice))
     }
 
     /// Number of cells.
@@ -145,7 +135,299 @@ impl Cells {
     }
 }
 
+/// The exact Delaunay triangulation behind the canonical cells, kept so that new points can
+/// be inserted locally (streaming): a new point splits the triangle (or the two triangles of
+/// the edge) it falls in, exact flips restore the Delaunay property around it, and only the
+/// edges of the triangles that changed are tested for cocircularity again.
+#[derive(Clone, Debug)]
+pub(crate) struct LiveCells {
+    mesh: Mesh,
+    /// Per triangle slot: whether the edge opposite vertex `i` joins two cocircular triangles.
+    merge: Vec<[bool; 3]>,
+    flips: usize,
+    /// Points inserted so far (`0..points` of the lattice list).
+    pub(crate) points: usize,
+    /// Where to start locating a point.
+    locator: Locator,
+}
+
+/// A coarse grid over the hull's bounding box (in lattice coordinates) holding, per bucket,
+/// a triangle near it: progressive sites are spread over the whole image, so walking from
+/// the last insertion would cross O(√n) triangles.
+#[derive(Clone, Debug)]
+struct Locator {
+    origin: [f64; 2],
+    inv: f64,
+    side: usize,
+    buckets: Vec<u32>,
+    /// Point count the grid was sized for.
+    sized_for: usize,
+}
+
+impl Locator {
+    fn new(mesh: &Mesh, pt: &impl Fn(u32) -> ZZeta, points: usize) -> Locator {
+        let centre = |t: usize| {
+            let v = mesh.tri[t].map(|i| pt(i).to_f64());
+            [
+                (v[0].0 + v[1].0 + v[2].0) / 3.0,
+                (v[0].1 + v[1].1 + v[2].1) / 3.0,
+            ]
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for t in (0..mesh.tri.len()).filter(|&t| mesh.alive[t]) {
+            let c = centre(t);
+            for k in 0..2 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        let side = ((mesh.tri.len() as f64).sqrt() / 2.0).clamp(1.0, 4096.0) as usize;
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
+        let mut l = Locator {
+            origin: lo,
+            inv: (side as f64 - 1e-9) / extent,
+            side,
+            buckets: vec![NONE; side * side],
+            sized_for: points,
+        };
+        for t in (0..mesh.tri.len()).filter(|&t| mesh.alive[t]) {
+            let k = l.bucket(centre(t));
+            l.buckets[k] = t as u32;
+        }
+        l
+    }
+
+    fn bucket(&self, p: [f64; 2]) -> usize {
+        let f = |k: usize| {
+            let v = ((p[k] - self.origin[k]) * self.inv).floor();
+            v.clamp(0.0, self.side as f64 - 1.0) as usize
+        };
+        f(1) * self.side + f(0)
+    }
+
+    fn hint(&self, x: ZZeta) -> u32 {
+        let (re, im) = x.to_f64();
+        self.buckets[self.bucket([re, im])]
+    }
+
+    fn note(&mut self, x: ZZeta, t: u32) {
+        let (re, im) = x.to_f64();
+        let k = self.bucket([re, im]);
+        self.buckets[k] = t;
+    }
+}
+
+/// Why a point could not be inserted locally (the caller rebuilds from scratch).
+#[derive(Debug)]
+pub(crate) struct Rebuild;
+
+impl LiveCells {
+    /// From any Delaunay triangulation of `lattice[0..n]` (`mesh` vertices index `lattice`).
+    pub(crate) fn build(mesh: &Triangulation, lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
+        let point = |i: u32| lattice.get(i as usize).copied().flatten();
+        for v in mesh.vertices() {
+            if !point(v.data().index).is_some_and(crate::lattice::within_exact_limit) {
+                return None;
+            }
+        }
+        // Every lattice point was checked above, so this lookup cannot fail.
+        let pt = |i: u32| point(i).unwrap_or(ZZeta([0; 4]));
+        let mut m = Mesh::new(mesh)?;
+        m.remove_slivers(&pt)?;
+        let (flips, merge) = m.lawson(&pt)?;
+        let locator = Locator::new(&m, &pt, lattice.len());
+        Some(LiveCells {
+            mesh: m,
+            merge,
+            flips,
+            points: lattice.len(),
+            locator,
+        })
+    }
+
+    /// The cells as they are now.
+    pub(crate) fn cells(&self, lattice: &[Option<ZZeta>]) -> Cells {
+        let pt = |i: u32| {
+            lattice
+                .get(i as usize)
+                .copied()
+                .flatten()
+                .unwrap_or(ZZeta([0; 4]))
+        };
+        self.mesh.cells(&pt, self.flips, &self.merge)
+    }
+
+    /// Inserts points `self.points..lattice.len()`. On [`Rebuild`] (a point outside the hull,
+    /// or anything unexpected) the state is unusable and the caller builds afresh.
+    pub(crate) fn extend(&mut self, lattice: &[Option<ZZeta>]) -> Result<(), Rebuild> {
+        let mut touched = Vec::new();
+        for i in self.points..lattice.len() {
+            let x = lattice[i]
+                .filter(|&x| crate::lattice::within_exact_limit(x))
+                .ok_or(Rebuild)?;
+            let pt = |j: u32| {
+                lattice
+                    .get(j as usize)
+                    .copied()
+                    .flatten()
+                    .unwrap_or(ZZeta([0; 4]))
+            };
+            self.insert(i as u32, x, &pt, &mut touched)?;
+        }
+        self.points = lattice.len();
+        if self.points > 4 * self.locator.sized_for {
+            let pt = |j: u32| lattice[j as usize].unwrap_or(ZZeta([0; 4]));
+            self.locator = Locator::new(&self.mesh, &pt, self.points);
+        }
+        // Cocircularity of every edge of a triangle that changed, seen from both sides.
+        let pt = |j: u32| lattice[j as usize].unwrap_or(ZZeta([0; 4]));
+        touched.sort_unstable();
+        touched.dedup();
+        for &t in &touched {
+            let t = t as usize;
+            for i in 0..3 {
+                let u = self.mesh.nbr[t][i];
+                let sign = match self.mesh.across(t, i) {
+                    Some((_, d)) => incircle(
+                        pt(self.mesh.tri[t][0]),
+                        pt(self.mesh.tri[t][1]),
+                        pt(self.mesh.tri[t][2]),
+                        pt(d),
+                    ),
+                    None => 1,
+                };
+                self.merge[t][i] = sign == 0;
+                if let Some((j, _)) = self.mesh.across(t, i) {
+                    self.merge[u as usize][j] = sign == 0;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Inserts point `i` at `x`: locate, split, flip.
+    fn insert(
+        &mut self,
+        i: u32,
+        x: ZZeta,
+        pt: &impl Fn(u32) -> ZZeta,
+        touched: &mut Vec<u32>,
+    ) -> Result<(), Rebuild> {
+        let m = &mut self.mesh;
+        // Visibility walk from a triangle near the point.
+        let mut t = self.locator.hint(x) as usize;
+        if t >= m.tri.len() || !m.alive[t] {
+            t = m.alive.iter().position(|&a| a).ok_or(Rebuild)?;
+        }
+        let mut steps = 0usize;
+        let side = loop {
+            let v = m.tri[t].map(pt);
+            let o = [
+                orient(v[1], v[2], x),
+                orient(v[2], v[0], x),
+                orient(v[0], v[1], x),
+            ];
+            match (0..3).find(|&k| o[k] < 0) {
+                Some(k) => {
+                    let u = m.nbr[t][k];
+                    if u == NONE {
+                        return Err(Rebuild); // outside the hull
+                    }
+                    t = u as usize;
+                    steps += 1;
+                    if steps > m.tri.len() + 8 {
+                        return Err(Rebuild);
+                    }
+                }
+                None => break o,
+            }
+        };
+        let zeros: Vec<usize> = (0..3).filter(|&k| side[k] == 0).collect();
+        let mut stack: Vec<(u32, u8)> = Vec::new();
+        match zeros.len() {
+            0 => {
+                let [a, b, c] = m.tri[t];
+                let [na, nb, nc] = m.nbr[t];
+                let (t1, t2, t3) = (t as u32, m.tri.len() as u32, m.tri.len() as u32 + 1);
+                m.tri[t] = [b, c, i];
+                m.nbr[t] = [t2, t3, na];
+                m.push([c, a, i], [t3, t1, nb]);
+                m.push([a, b, i], [t1, t2, nc]);
+                m.relink(nb, t1, t2);
+                m.relink(nc, t1, t3);
+                self.merge.resize(m.tri.len(), [false; 3]);
+                self.merge[t] = [false; 3];
+                stack.extend([(t1, 2), (t2, 2), (t3, 2)]);
+                touched.extend([t1, t2, t3]);
+            }
+            1 => {
+                // On the edge opposite vertex k of t: split t and its neighbour into four.
+                let k = zeros[0];
+                let Some((j, _)) = m.across(t, k) else {
+                    return Err(Rebuild); // on the hull boundary
+                };
+                let u = m.nbr[t][k] as usize;
+                let (a, b, c) = (m.tri[t][k], m.tri[t][(k + 1) % 3], m.tri[t][(k + 2) % 3]);
+                let d = m.tri[u][j];
+                let (t_ab, t_ca) = (m.nbr[t][(k + 2) % 3], m.nbr[t][(k + 1) % 3]);
+                let (u_dc, u_bd) = (m.nbr[u][(j + 2) % 3], m.nbr[u][(j + 1) % 3]);
+                let (t1, u1) = (t as u32, u as u32);
+                let (t2, u2) = (m.tri.len() as u32, m.tri.len() as u32 + 1);
+                m.tri[t] = [a, b, i];
+                m.nbr[t] = [u2, t2, t_ab];
+                m.tri[u] = [d, c, i];
+                m.nbr[u] = [t2, u2, u_dc];
+                m.push([a, i, c], [u1, t_ca, t1]);
+                m.push([d, i, b], [t1, u_bd, u1]);
+                m.relink(t_ca, t1, t2);
+                m.relink(u_bd, u1, u2);
+                self.merge.resize(m.tri.len(), [false; 3]);
+                self.merge[t] = [false; 3];
+                self.merge[u] = [false; 3];
+                stack.extend([(t1, 2), (t2, 1), (u1, 2), (u2, 1)]);
+                touched.extend([t1, t2, u1, u2]);
+            }
+            _ => {
+                // On a vertex: the same point again (the first is kept).
+                let v = m.tri[t].map(pt);
+                return if v.contains(&x) { Ok(()) } else { Err(Rebuild) };
+            }
+        }
+        self.locator.note(x, t as u32);
+        // Lawson flips around the new point.
+        let budget = 8 * m.tri.len() + 64;
+        let mut flips = 0usize;
+        while let Some((t, e)) = stack.pop() {
+            let (t, e) = (t as usize, e as usize);
+            let Some((_, d)) = m.across(t, e) else {
+                continue;
+            };
+            let v = m.tri[t];
+            let sign = incircle(pt(v[0]), pt(v[1]), pt(v[2]), pt(d));
+            if sign <= 0 {
+                continue;
+            }
+            let (a, b, c) = (pt(v[e]), pt(v[(e + 1) % 3]), pt(v[(e + 2) % 3]));
+            if orient(a, b, pt(d)) <= 0 || orient(a, pt(d), c) <= 0 {
+                return Err(Rebuild);
+            }
+            flips += 1;
+            if flips > budget {
+                return Err(Rebuild);
+            }
+            let (t1, t2) = m.flip(t as u32, e).ok_or(Rebuild)?;
+            // New triangles are [a, b, d] and [a, d, c], a the new point: their edges
+            // opposite a are the ones to check.
+            stack.extend([(t1, 0), (t2, 0)]);
+            touched.extend([t1, t2]);
+        }
+        self.flips += flips;
+        Ok(())
+    }
+}
+
 /// Triangles with neighbours: `nbr[t][i]` is across the edge opposite `tri[t][i]`.
+#[derive(Clone, Debug)]
 struct Mesh {
     tri: Vec<[u32; 3]>,
     nbr: Vec<[u32; 3]>,
@@ -175,6 +457,27 @@ impl Mesh {
         }
         let alive = vec![true; n];
         Some(Mesh { tri, nbr, alive })
+    }
+
+    /// Appends a triangle.
+    fn push(&mut self, tri: [u32; 3], nbr: [u32; 3]) {
+        self.tri.push(tri);
+        self.nbr.push(nbr);
+        self.alive.push(true);
+    }
+
+    /// The neighbour across the edge opposite vertex `i` of `t`: its slot `j` for that edge
+    /// and its vertex `d` there, if any.
+    fn across(&self, t: usize, i: usize) -> Option<(usize, u32)> {
+        let u = self.nbr[t][i];
+        if u == NONE {
+            return None;
+        }
+        let v = self.tri[t];
+        let uv = self.tri[u as usize];
+        let j = (0..3)
+            .find(|&j| uv[(j + 1) % 3] == v[(i + 2) % 3] && uv[(j + 2) % 3] == v[(i + 1) % 3])?;
+        Some((j, uv[j]))
     }
 
     /// Replaces `old` by `new` in `t`'s neighbour list.

@@ -60,6 +60,7 @@ use crate::lattice::ZZeta;
 use crate::sites::{Frame as LatticeFrame, Point};
 
 pub use cells::Cells;
+use cells::LiveCells;
 pub use gouraud::{cell_triangles, triangles};
 pub use mesh::{Triangulation, Vertex};
 #[doc(hidden)]
@@ -174,7 +175,11 @@ pub struct SampleSet {
     mesh: Triangulation,
     synced: usize,
     grid: Option<Grid>,
-    /// Canonical cells and the sample count they were computed for.
+    /// The exact triangulation behind the cells, updated locally as points arrive.
+    live: Option<LiveCells>,
+    /// How many times it was built from scratch.
+    rebuilds: usize,
+    /// Canonical cells and the point count they were computed for.
     cells: Option<(usize, Option<Cells>)>,
 }
 
@@ -197,6 +202,8 @@ impl SampleSet {
             mesh: Triangulation::new(),
             synced: 0,
             grid: None,
+            live: None,
+            rebuilds: 0,
             cells: None,
         }
     }
@@ -405,25 +412,46 @@ impl SampleSet {
 
     /// The canonical Delaunay cells of the points ([`SampleSet::points`]), if every sample
     /// has an exact lattice point (and there are at least three points, not all collinear).
-    /// Recomputed from the kept triangulation when samples were added since the last call.
+    ///
+    /// The exact triangulation behind them is kept: points added since the last call are
+    /// inserted locally (each splits the triangle it falls in, exact flips repair the
+    /// Delaunay property around it, and only the changed triangles' edges are tested for
+    /// cocircularity again). A point outside the current hull makes it start afresh from
+    /// `spade`'s triangulation. Either way the cells are the same.
     pub fn cells(&mut self) -> Option<&Cells> {
         self.sync_cells();
         self.cells.as_ref().and_then(|(_, c)| c.as_ref())
     }
 
+    /// How many times the cells' triangulation was built from scratch rather than updated
+    /// (for tests of the local update).
+    #[doc(hidden)]
+    pub fn cell_rebuilds(&self) -> usize {
+        self.rebuilds
+    }
+
     fn sync_cells(&mut self) {
         let pts = &self.points;
-        mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
         let n = pts.positions.len();
         if self.cells.as_ref().map(|c| c.0) == Some(n) {
             return;
         }
-        let cells = if pts.exact == n && n >= 3 {
-            Cells::build(&self.mesh, &pts.lattice).filter(|c| !c.is_empty())
-        } else {
-            None
+        if pts.exact != n || n < 3 {
+            self.live = None;
+            self.cells = Some((n, None));
+            return;
+        }
+        let grown = match &mut self.live {
+            Some(live) => live.extend(&pts.lattice).is_ok(),
+            None => false,
         };
-        self.cells = Some((n, cells));
+        if !grown {
+            mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
+            self.live = LiveCells::build(&self.mesh, &pts.lattice);
+            self.rebuilds += 1;
+        }
+        let cells = self.live.as_ref().map(|l| l.cells(&pts.lattice));
+        self.cells = Some((n, cells.filter(|c| !c.is_empty())));
     }
 
     /// Renders a `width × height` picture, interleaved, `channels` bytes per pixel, in parallel.
@@ -473,6 +501,9 @@ impl SampleSet {
         match method {
             Method::Gouraud => {
                 let cells = self.cells.as_ref().and_then(|(_, c)| c.as_ref());
+                if cells.is_none() {
+                    mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
+                }
                 gouraud::render(&self.mesh, cells, &pts.positions, &frame, options.parallel)
             }
             Method::Natural => {
