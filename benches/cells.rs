@@ -53,8 +53,10 @@ fn bench(c: &mut Criterion) {
         g.bench_function(BenchmarkId::new("gouraud_cells", n), |b| {
             b.iter(|| black_box(exact.render_with(Method::Gouraud, SIDE, SIDE, single)))
         });
-        let lattice: Vec<Option<ZZeta>> = sites.iter().map(|s| Some(s.lattice)).collect();
+        // The mesh's vertices are the samples and their mirror points.
+        let lattice: Vec<Option<ZZeta>> = exact.point_lattice().to_vec();
         let mesh = exact.triangulation().clone();
+        assert!(Cells::build(&mesh, &lattice).is_some(), "exact cells");
         g.bench_function(BenchmarkId::new("cells_build", n), |b| {
             b.iter(|| black_box(Cells::build(&mesh, &lattice).map(|c| c.len())))
         });
