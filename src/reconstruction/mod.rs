@@ -21,9 +21,9 @@
 //!
 //! Gouraud and natural neighbour are only defined inside the convex hull of the samples and
 //! their mirror points, which covers the image from the first sample on (its mirror points
-//! surround it) unless the samples are outside the image. A pixel centre outside it takes the colour of the **nearest point of the hull boundary**
-//! (distance in source pixels), colours being linear along each hull edge between its two end
-//! samples. This continues the interpolation without a seam and leaves no black border. With
+//! surround it) unless the samples are outside the image. A pixel centre outside it takes
+//! the colour of the **nearest point of the hull boundary** (distance in source pixels),
+//! colours being linear along each hull edge between its two end samples. This continues the interpolation without a seam and leaves no black border. With
 //! one sample the whole picture takes its colour; with two (or all collinear) the boundary is
 //! the polyline through them. With no sample every pixel is mid-grey (128).
 //!
