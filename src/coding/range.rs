@@ -7,6 +7,16 @@
 //! layout and flushes as few bytes as needed, trimming trailing zeros: the decoder reads 0x00 past
 //! the end of a payload.
 //!
+//! **Why not a crate.** `constriction` (the well-kept Rust entropy-coding library) was the
+//! candidate. Its range coder works on multi-symbol models with fixed probabilities per call;
+//! qcs needs three things it does not give: adaptive *binary* contexts updated after every bit
+//! (which would mean building a model per bit), a decoder that reads a *truncated* payload
+//! and reports exactly which symbols the received bytes determine (the any-prefix rule of
+//! `spec/format.md`: a sample counts only if no missing byte can change it), and a bitstream
+//! simple enough to be normative in a page of the spec and frozen independently of a
+//! dependency's versions. This coder is about 150 lines, tested by round trips, by every
+//! truncation of every conformance file and by the fuzz targets.
+//!
 //! ```
 //! use qcs::coding::range::{Prob, RangeDecoder, RangeEncoder};
 //! let bits = [true, false, false, true, true, true, false, true];
