@@ -14,7 +14,7 @@
 //! and reports exactly which symbols the received bytes determine (the any-prefix rule of
 //! `spec/format.md`: a sample counts only if no missing byte can change it), and a bitstream
 //! simple enough to be normative in a page of the spec and frozen independently of a
-//! dependency's versions. This coder is about 150 lines, tested by round trips, by every
+//! dependency's versions. This coder is about 150 lines of code, tested by round trips, by every
 //! truncation of every conformance file and by the fuzz targets.
 //!
 //! ```
