@@ -181,7 +181,7 @@ pub(crate) fn render(
                     cell_fan(cell, positions, colours, c, scale, f);
                 }
             };
-            raster::paint_groups(cells.len(), extent, emit, (w, h, c), parallel, finish)
+            raster::paint_groups(cells.len(), extent, emit, (w, h, c), parallel, finish).0
         }
         None => {
             let tris = triangles(mesh, colours, c, scale);
@@ -190,7 +190,7 @@ pub(crate) fn render(
                 (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]))
             };
             let emit = |k: usize, f: &mut dyn FnMut(&RasterTriangle)| f(&tris[k]);
-            raster::paint_groups(tris.len(), extent, emit, (w, h, c), parallel, finish)
+            raster::paint_groups(tris.len(), extent, emit, (w, h, c), parallel, finish).0
         }
     }
 }

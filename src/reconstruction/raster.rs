@@ -350,7 +350,8 @@ const BAND: usize = 32;
 /// Delaunay cell), band by band: each group is binned by the rows its vertices span
 /// (`y_extent`, output pixels), then each band draws the triangles `emit` gives for its
 /// groups, in group order, and `finish` paints what no triangle claimed. Bands run on the
-/// `rayon` pool when `parallel`; the picture is the same either way.
+/// `rayon` pool when `parallel`; the picture is the same either way. Returns the pixels and
+/// the mask of pixels a triangle claimed.
 pub(crate) fn paint_groups<E, Y, F>(
     groups: usize,
     y_extent: Y,
@@ -358,7 +359,7 @@ pub(crate) fn paint_groups<E, Y, F>(
     (width, height, channels): (usize, usize, usize),
     parallel: bool,
     finish: F,
-) -> Vec<u8>
+) -> (Vec<u8>, Vec<bool>)
 where
     Y: Fn(usize) -> (f64, f64),
     E: Fn(usize, &mut dyn FnMut(&RasterTriangle)) + Sync,
@@ -366,8 +367,9 @@ where
 {
     let (w, h, c) = (width, height, channels);
     let mut out = vec![0u8; w * h * c];
+    let mut mask = vec![false; w * h];
     if w == 0 || h == 0 {
-        return out;
+        return (out, mask);
     }
     let nbands = h.div_ceil(BAND);
     // Counting sort of the groups into the bands they touch.
@@ -399,16 +401,14 @@ where
         }
     }
     drop(spans);
-    let run = |b: usize, chunk: &mut [u8]| {
-        let rows = chunk.len() / (w * c);
-        let mut painted = vec![false; rows * w];
+    let run = |b: usize, chunk: &mut [u8], painted: &mut [bool]| {
         let mut band = Band {
             width: w,
             row0: b * BAND,
-            rows,
+            rows: painted.len() / w,
             channels: c,
             pixels: chunk,
-            painted: &mut painted,
+            painted,
         };
         for &g in &bins[start[b] as usize..start[b + 1] as usize] {
             emit(g as usize, &mut |t| paint(t, &mut band));
@@ -418,14 +418,16 @@ where
     if parallel {
         use rayon::prelude::*;
         out.par_chunks_mut(BAND * w * c)
+            .zip(mask.par_chunks_mut(BAND * w))
             .enumerate()
-            .for_each(|(b, chunk)| run(b, chunk));
+            .for_each(|(b, (chunk, painted))| run(b, chunk, painted));
     } else {
-        for (b, chunk) in out.chunks_mut(BAND * w * c).enumerate() {
-            run(b, chunk);
+        let bands = out.chunks_mut(BAND * w * c).zip(mask.chunks_mut(BAND * w));
+        for (b, (chunk, painted)) in bands.enumerate() {
+            run(b, chunk, painted);
         }
     }
-    out
+    (out, mask)
 }
 
 /// The y extent of a triangle.
@@ -481,20 +483,12 @@ pub fn rasterise(
     channels: usize,
 ) -> (Vec<u8>, Vec<bool>) {
     let c = channels.clamp(1, 4);
-    let (w, h) = (width as usize, height as usize);
-    let painted = std::sync::Mutex::new(vec![false; w.saturating_mul(h)]);
-    let pixels = paint_groups(
+    paint_groups(
         triangles.len(),
         |k| y_extent(&triangles[k]),
         |k, f| f(&triangles[k]),
-        (w, h, c),
+        (width as usize, height as usize, c),
         false,
-        |band| {
-            let mut all = painted.lock().unwrap_or_else(|e| e.into_inner());
-            let at = band.row0 * band.width;
-            all[at..at + band.painted.len()].copy_from_slice(band.painted);
-        },
-    );
-    let painted = painted.into_inner().unwrap_or_else(|e| e.into_inner());
-    (pixels, painted)
+        |_| {},
+    )
 }
