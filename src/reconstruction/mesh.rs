@@ -47,7 +47,10 @@ pub(crate) fn sync(mesh: &mut Triangulation, positions: &[Point], synced: &mut u
     }
     let new = &positions[*synced..];
     let base = *synced;
-    if mesh.num_vertices() == 0 && new.len() > 16 {
+    // Under `cfg(fuzzing)` (cargo-fuzz sets it for every crate) spade checks its bulk-load
+    // hull after every vertex, which is quadratic: a 3199×2 image's 768 samples and their
+    // mirror points took 3 s. Fuzz builds insert one by one instead (same cells).
+    if mesh.num_vertices() == 0 && new.len() > 16 && !cfg!(fuzzing) {
         let vertices: Vec<Vertex> = new
             .iter()
             .enumerate()
