@@ -32,7 +32,9 @@ pub struct Limits {
     /// This is also the bound on the decoder's memory for sites, colours and the triangulation,
     /// which grows with the samples actually received (never with N itself): about 0.9 KiB per
     /// sample at peak for a [`crate::StreamDecoder`] rendering all of them (measured: 895 bytes
-    /// per sample for 2^20 samples, Gouraud). The default 2^21 (enough for a 16-megapixel photo
+    /// per sample for 2^20 samples, Gouraud, before mirror points). Mirror points
+    /// (`spec/reconstruction.md` §2) add a few per sample near the edges: O(√N) in all on an
+    /// ordinary image, at most 8 per sample (about 2 on a strip a few pixels high). The default 2^21 (enough for a 16-megapixel photo
     /// at the default 1 sample per 8 pixels) bounds that to about 1.8 GiB, reached only by a file
     /// that really holds 2^21 samples; raise it for larger images, lower it on small machines.
     pub max_samples: u64,
