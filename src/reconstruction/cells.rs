@@ -166,16 +166,20 @@ struct Locator {
 
 impl Locator {
     fn new(mesh: &Mesh, pt: &impl Fn(u32) -> ZZeta, points: usize) -> Locator {
-        let centre = |t: usize| {
-            let v = mesh.tri[t].map(|i| pt(i).to_f64());
-            [
-                (v[0].0 + v[1].0 + v[2].0) / 3.0,
-                (v[0].1 + v[1].1 + v[2].1) / 3.0,
-            ]
-        };
+        // Each live triangle's centroid, computed once.
+        let centres: Vec<(u32, [f64; 2])> = (0..mesh.tri.len())
+            .filter(|&t| mesh.alive[t])
+            .map(|t| {
+                let v = mesh.tri[t].map(|i| pt(i).to_f64());
+                let c = [
+                    (v[0].0 + v[1].0 + v[2].0) / 3.0,
+                    (v[0].1 + v[1].1 + v[2].1) / 3.0,
+                ];
+                (t as u32, c)
+            })
+            .collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for t in (0..mesh.tri.len()).filter(|&t| mesh.alive[t]) {
-            let c = centre(t);
+        for (_, c) in &centres {
             for k in 0..2 {
                 lo[k] = lo[k].min(c[k]);
                 hi[k] = hi[k].max(c[k]);
@@ -190,9 +194,9 @@ impl Locator {
             buckets: vec![NONE; side * side],
             sized_for: points,
         };
-        for t in (0..mesh.tri.len()).filter(|&t| mesh.alive[t]) {
-            let k = l.bucket(centre(t));
-            l.buckets[k] = t as u32;
+        for &(t, c) in &centres {
+            let k = l.bucket(c);
+            l.buckets[k] = t;
         }
         l
     }
@@ -285,21 +289,15 @@ impl LiveCells {
         touched.dedup();
         for &t in &touched {
             let t = t as usize;
+            let v = self.mesh.tri[t].map(pt);
             for i in 0..3 {
-                let u = self.mesh.nbr[t][i];
-                let sign = match self.mesh.across(t, i) {
-                    Some((_, d)) => incircle(
-                        pt(self.mesh.tri[t][0]),
-                        pt(self.mesh.tri[t][1]),
-                        pt(self.mesh.tri[t][2]),
-                        pt(d),
-                    ),
-                    None => 1,
+                let Some((j, d)) = self.mesh.across(t, i) else {
+                    self.merge[t][i] = false;
+                    continue;
                 };
-                self.merge[t][i] = sign == 0;
-                if let Some((j, _)) = self.mesh.across(t, i) {
-                    self.merge[u as usize][j] = sign == 0;
-                }
+                let cocircular = incircle(v[0], v[1], v[2], pt(d)) == 0;
+                self.merge[t][i] = cocircular;
+                self.merge[self.mesh.nbr[t][i] as usize][j] = cocircular;
             }
         }
         Ok(())
