@@ -161,17 +161,18 @@ impl StreamDecoder {
                     let leb = |v: u32| (32 - v.leading_zeros()).div_ceil(7).max(1) as u64;
                     let (field, offset, value, expected) = match (e, h.lattice) {
                         (FrameError::RootLength(r), Some(l)) => {
-                            // The root length is followed by the two origin varints and the CRC.
+                            // The root length is followed by the two origin varints and the
+                            // check byte.
                             let zz = |v: i32| ((v << 1) ^ (v >> 31)) as u32;
                             let len = h.encode().map_or(0, |b| b.len() as u64);
-                            let tail = 4 + leb(zz(l.origin_x)) + leb(zz(l.origin_y)) + leb(r);
+                            let tail = 1 + leb(zz(l.origin_x)) + leb(zz(l.origin_y)) + leb(r);
                             let offset = len.saturating_sub(tail);
                             ("lattice root length", offset, r as u64, "65536..=16777216")
                         }
                         (FrameError::Size(..), _) if h.width > 65535 => {
-                            ("width", 5, h.width as u64, "≤ 65535")
+                            ("width", 3, h.width as u64, "≤ 65535")
                         }
-                        _ => ("height", 5 + leb(h.width), h.height as u64, "≤ 65535"),
+                        _ => ("height", 3 + leb(h.width), h.height as u64, "≤ 65535"),
                     };
                     Error::Format(FormatError::InvalidField {
                         field,
@@ -186,8 +187,8 @@ impl StreamDecoder {
                         pixels: h.width as u64 * h.height as u64,
                     }));
                 }
-                if let Coding::Predictive { params } = &h.coding {
-                    let params = Params::from_bytes(params)?;
+                if let Coding::Predictive { step } = h.coding {
+                    let params = Params { step };
                     self.predictive = Some(PredictiveDecoder::new(
                         params,
                         h.layout.channels(),
@@ -219,6 +220,9 @@ impl StreamDecoder {
                             .collect();
                         if let Some(p) = &mut self.predictive {
                             p.start_level(&fixed, *payload_len as usize)?;
+                            // An empty payload (every residual zero) sends no data event, and
+                            // decodes from no bytes at all.
+                            p.push(&[], &mut self.colours)?;
                         }
                         None
                     }

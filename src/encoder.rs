@@ -13,19 +13,23 @@ use std::io::Write;
 /// ```
 /// let opts = qcs::EncodeOptions { samples: Some(5000), ..Default::default() };
 /// assert_eq!(opts.sample_count(512, 512), 5000);
-/// assert_eq!(qcs::EncodeOptions::default().sample_count(512, 512), 32768);
+/// assert_eq!(qcs::EncodeOptions::default().sample_count(512, 512), 65536);
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodeOptions {
     /// Total samples N; `None` uses `density`.
     pub samples: Option<u64>,
-    /// Samples per pixel when `samples` is `None` (default 1/8).
+    /// Samples per pixel when `samples` is `None` (default 1/4): N = ⌊W·H·density⌋, at least 1.
+    /// A multiple of 1/256 is stored in one header byte.
     pub density: f64,
-    /// The colour coding (default: raw, 8 bits per channel).
+    /// The colour coding (default: predictive at quality
+    /// [`DEFAULT_QUALITY`](crate::coding::predictive::DEFAULT_QUALITY)).
     pub coding: Coding,
     /// What a sample's colour is.
     pub colour: SampleColour,
-    /// Samples in the first level (each later level doubles the count). Default 8.
+    /// Samples in the first level (each later level doubles the count). Default 128: the first
+    /// level is one stretch of bytes with no chunk framing inside, which the smallest previews
+    /// need.
     pub first_level: u64,
     /// Lattice placement; `None` for the default frame of spec/sites.md.
     pub frame: Option<Frame>,
@@ -39,10 +43,10 @@ impl Default for EncodeOptions {
     fn default() -> Self {
         EncodeOptions {
             samples: None,
-            density: 0.125,
-            coding: Coding::Raw { bits: 8 },
+            density: 0.25,
+            coding: crate::coding::predictive::Params::default().coding(),
             colour: SampleColour::default(),
-            first_level: 8,
+            first_level: 128,
             frame: None,
             icc: None,
             text: Vec::new(),
@@ -56,7 +60,7 @@ impl EncodeOptions {
         let px = width as u64 * height as u64;
         let n = match self.samples {
             Some(n) => n,
-            None => (self.density * px as f64).round() as u64,
+            None => (self.density * px as f64).floor() as u64,
         };
         n.clamp(1, px.max(1))
     }
@@ -85,7 +89,9 @@ fn layout_and_pixels(image: &DynamicImage) -> (Layout, Vec<u8>) {
 /// let bytes = qcs::encode(&img, &qcs::EncodeOptions { samples: Some(300), ..Default::default() })?;
 /// let back = qcs::decode(&bytes, &qcs::DecodeOptions::default())?;
 /// assert!(back.is_final);
-/// assert_eq!(back.image.to_rgb8().get_pixel(20, 15).0, [200, 100, 50]);
+/// // The default predictive coding (quality 75) quantises luma in steps of 7, chroma of 13.
+/// let px = back.image.to_rgb8().get_pixel(20, 15).0;
+/// assert!(px.iter().zip([200, 100, 50]).all(|(&a, b)| a.abs_diff(b) <= 7), "{px:?}");
 /// # Ok::<(), qcs::Error>(())
 /// ```
 pub fn encode(image: &DynamicImage, opts: &EncodeOptions) -> Result<Vec<u8>> {
@@ -128,8 +134,8 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
     let sites = seq.first(n as usize);
     let positions: Vec<_> = sites.iter().map(|s| s.pos).collect();
     let mut predictive = match &opts.coding {
-        Coding::Predictive { params } => Some((
-            PredictiveEncoder::new(Params::from_bytes(params)?, channels as u8, width, height)?,
+        Coding::Predictive { step } => Some((
+            PredictiveEncoder::new(Params { step: *step }, channels as u8, width, height)?,
             sites
                 .iter()
                 .map(|s| fixed_position(&frame, s.lattice))

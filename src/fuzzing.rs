@@ -242,32 +242,26 @@ pub fn push(data: &[u8]) {
     }
 }
 
-/// The header parser on arbitrary bytes: a parsed header re-encodes to the same bytes (the
-/// encoding is unique), its level schedule is consistent, and the push [`Parser`] fed one byte at
+/// The header parser on arbitrary bytes: a parsed header re-encodes to the same header, its
+/// level schedule is consistent, and the push [`Parser`] fed one byte at
 /// a time agrees with [`Header::parse`]. Also runs [`container::inspect`].
 ///
 /// ```
-/// qcs::fuzzing::header(b"qcs\x01\x00\x02\x02\x01\x03\x02\x00\x01\x08\x6e\xcc\x57\x5b");
+/// qcs::fuzzing::header(b"qc\x40\x02\x02\xc0\x02\x08\x15");
 /// ```
 pub fn header(data: &[u8]) {
     let parsed = Header::parse(data);
     if let Ok((h, len)) = &parsed {
         let len = *len;
-        // 16 bytes only with the predictive coding and no parameter bytes; raw needs 17.
-        let min = if h.coding == (Coding::Predictive { params: vec![] }) {
-            16
-        } else {
-            17
-        };
         assert!(
-            (min..=container::MAX_HEADER_LEN).contains(&len),
+            (9..=container::MAX_HEADER_LEN).contains(&len),
             "header length {len}"
         );
+        // N may be written out where a density byte would do, or several density bytes may
+        // give it: the encoder writes the shortest form, and the same header.
         let bytes = h.encode().expect("a parsed header encodes");
-        // The CRC is not checked under cfg(fuzzing); everything before it must match.
-        assert_eq!(bytes.len(), len, "re-encoded length");
-        assert_eq!(&bytes[..len - 4], &data[..len - 4], "re-encoding differs");
-        assert_eq!(Header::parse(&bytes).ok(), Some((h.clone(), len)));
+        assert!(bytes.len() <= len, "re-encoded length");
+        assert_eq!(Header::parse(&bytes).ok(), Some((h.clone(), bytes.len())));
         let levels = h.level_count();
         assert!((1..=65).contains(&levels), "{levels} levels");
         let mut next = 0;

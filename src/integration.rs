@@ -28,7 +28,11 @@ fn to_image_error(e: Error) -> ImageError {
 /// ```
 /// use image::ImageDecoder;
 /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(16, 8, image::Rgb([9, 99, 199])));
-/// let bytes = qcs::encode(&img, &Default::default())?;
+/// let lossless = qcs::EncodeOptions {
+///     coding: qcs::coding::predictive::Params::lossless().coding(),
+///     ..Default::default()
+/// };
+/// let bytes = qcs::encode(&img, &lossless)?;
 /// let dec = qcs::QcsImageDecoder::new(std::io::Cursor::new(bytes))?;
 /// assert_eq!(dec.dimensions(), (16, 8));
 /// let back = image::DynamicImage::from_decoder(dec)?;
@@ -106,20 +110,25 @@ impl ImageDecoder for QcsImageDecoder {
     }
 }
 
-/// Registers `.qcs` with the `image` crate: by extension and by signature (`qcs` + version 1).
+/// Registers `.qcs` with the `image` crate: by extension and by signature (`qc` and a format
+/// byte of version 2).
 /// Returns `false` if a decoder for the extension was already registered.
 ///
 /// ```
 /// qcs::register_image_hooks();
 /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_pixel(8, 8, image::Luma([77])));
 /// let path = std::env::temp_dir().join("qcs-doc-hook.qcs");
-/// std::fs::write(&path, qcs::encode(&img, &Default::default())?)?;
+/// let lossless = qcs::EncodeOptions {
+///     coding: qcs::coding::predictive::Params::lossless().coding(),
+///     ..Default::default()
+/// };
+/// std::fs::write(&path, qcs::encode(&img, &lossless)?)?;
 /// let back = image::open(&path)?;
 /// assert_eq!(back.to_luma8().get_pixel(4, 4).0, [77]);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn register_image_hooks() -> bool {
-    image::hooks::register_format_detection_hook("qcs".into(), b"qcs\x01", None);
+    image::hooks::register_format_detection_hook("qcs".into(), b"qc\x40", Some(b"\xFF\xFF\xE0"));
     image::hooks::register_decoding_hook(
         "qcs".into(),
         Box::new(|r| Ok(Box::new(QcsImageDecoder::new(r)?))),

@@ -19,7 +19,8 @@ pub enum Cadence {
 /// ```
 /// use qcs::{Cadence, Method, Previews};
 /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(48, 32, |x, y| image::Rgb([x as u8 * 5, y as u8 * 7, 128])));
-/// let bytes = qcs::encode(&img, &Default::default())?;
+/// let opts = qcs::EncodeOptions { first_level: 8, ..Default::default() };
+/// let bytes = qcs::encode(&img, &opts)?;
 /// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, Method::Gouraud, None, qcs::Limits::default())
 ///     .collect::<Result<_, _>>()?;
 /// assert!(pics.len() > 3);

@@ -26,11 +26,16 @@ fn psnr(a: &[u8], b: &[u8]) -> f64 {
     10.0 * (255.0f64 * 255.0 / mse.max(1e-12)).log10()
 }
 
+fn raw8() -> EncodeOptions {
+    EncodeOptions {
+        coding: Coding::Raw { bits: 8 },
+        ..Default::default()
+    }
+}
+
 fn predictive(params: Params) -> EncodeOptions {
     EncodeOptions {
-        coding: Coding::Predictive {
-            params: params.to_bytes(),
-        },
+        coding: params.coding(),
         ..Default::default()
     }
 }
@@ -78,7 +83,7 @@ fn psnr_never_drops_as_bytes_are_added() {
 #[test]
 fn three_times_fewer_bytes_than_raw_at_equal_psnr() {
     let img = load("assets/rocket.png");
-    let raw = qcs::encode(&img.clone().into(), &EncodeOptions::default()).unwrap();
+    let raw = qcs::encode(&img.clone().into(), &raw8()).unwrap();
     let raw_psnr = psnr_at(&raw, raw.len(), &img);
     let pred = qcs::encode(&img.clone().into(), &predictive(Params::from_quality(85))).unwrap();
     let pred_psnr = psnr_at(&pred, pred.len(), &img);
@@ -99,7 +104,7 @@ fn lossless_renders_exactly_as_raw_8_bit() {
     // Lossless predictive and raw 8-bit carry the same sample values, so every render agrees.
     for path in IMAGES {
         let img: image::DynamicImage = load(path).into();
-        let raw = qcs::encode(&img, &EncodeOptions::default()).unwrap();
+        let raw = qcs::encode(&img, &raw8()).unwrap();
         let pred = qcs::encode(&img, &predictive(Params::lossless())).unwrap();
         let a = qcs::decode(&raw, &DecodeOptions::default()).unwrap();
         let b = qcs::decode(&pred, &DecodeOptions::default()).unwrap();

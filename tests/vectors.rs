@@ -115,7 +115,7 @@ fn vectors() -> Vec<Vector> {
             image: rgb(48, 40),
             opts: EncodeOptions {
                 coding: Coding::Predictive {
-                    params: qcs::coding::predictive::Params::from_quality(75).to_bytes(),
+                    step: qcs::coding::predictive::Params::from_quality(75).step,
                 },
                 ..base(240, 8)
             },
@@ -125,9 +125,7 @@ fn vectors() -> Vec<Vector> {
             what: "grey, predictive coding, lossless samples",
             image: grey(32, 32),
             opts: EncodeOptions {
-                coding: Coding::Predictive {
-                    params: qcs::coding::predictive::Params::lossless().to_bytes(),
-                },
+                coding: Coding::Predictive { step: 1 },
                 ..base(128, 8)
             },
         },

@@ -35,8 +35,7 @@ pub enum ColourArg {
     Progressive,
 }
 
-/// The CLI's default quality of the predictive coding.
-pub const DEFAULT_QUALITY: u8 = 75;
+pub use qcs::coding::predictive::DEFAULT_QUALITY;
 
 #[derive(Args, Debug)]
 pub struct EncodeArgs {
@@ -49,7 +48,7 @@ pub struct EncodeArgs {
     /// Total number of samples.
     #[arg(long, conflicts_with = "density")]
     pub samples: Option<u64>,
-    /// Samples per pixel (default 0.125).
+    /// Samples per pixel (default 0.25).
     #[arg(long)]
     pub density: Option<f64>,
     /// Raw coding (coding 0) at this many bits per channel, 1–8, instead of the predictive coding.
@@ -79,9 +78,7 @@ impl EncodeArgs {
         };
         let coding = match self.bits {
             Some(bits) => Coding::Raw { bits },
-            None => Coding::Predictive {
-                params: params.to_bytes(),
-            },
+            None => params.coding(),
         };
         let mut o = EncodeOptions {
             samples: self.samples,
@@ -459,9 +456,7 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
     let params = qcs::coding::predictive::Params::from_quality(DEFAULT_QUALITY);
     let opts = EncodeOptions {
         samples: a.samples,
-        coding: Coding::Predictive {
-            params: params.to_bytes(),
-        },
+        coding: params.coding(),
         ..Default::default()
     };
     let bytes = qcs::encode(&img, &opts)?;

@@ -45,9 +45,9 @@ pub const NEIGHBOURS: usize = 4;
 /// Fixed-point unit of positions: 1/256 px.
 pub const POS_ONE: i64 = 256;
 
-/// The parameters of the predictive coding (its header parameter bytes).
+/// The parameters of the predictive coding (its header parameter byte).
 ///
-/// One byte: the luma quantisation step `s` (1..=255). Luma, grey and alpha use `s`; the chroma
+/// The luma quantisation step `s` (1..=255). Luma, grey and alpha use `s`; the chroma
 /// channels Co and Cg use `2s − 1`. `s = 1` is lossless.
 ///
 /// ```
@@ -55,8 +55,7 @@ pub const POS_ONE: i64 = 256;
 /// assert_eq!(Params::from_quality(100), Params::lossless());
 /// assert_eq!(Params::from_quality(75).step, 7);
 /// assert_eq!(Params::from_quality(0).step, 101);
-/// assert_eq!(Params::from_bytes(&Params { step: 5 }.to_bytes())?.chroma_step(), 9);
-/// # Ok::<(), qcs::Error>(())
+/// assert_eq!(Params { step: 5 }.chroma_step(), 9);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Params {
@@ -65,11 +64,14 @@ pub struct Params {
 }
 
 impl Default for Params {
-    /// Quality 60 (step 17): the best mean preview PSNR over the byte budgets on the dev photos.
+    /// Quality [`DEFAULT_QUALITY`].
     fn default() -> Self {
-        Params::from_quality(60)
+        Params::from_quality(DEFAULT_QUALITY)
     }
 }
+
+/// The quality of [`Params::default`], [`crate::EncodeOptions::default`] and `qcs encode`.
+pub const DEFAULT_QUALITY: u8 = 75;
 
 impl Params {
     /// Lossless samples: step 1.
@@ -97,22 +99,15 @@ impl Params {
         2 * self.luma_step() - 1
     }
 
-    /// The header parameter bytes.
-    pub fn to_bytes(&self) -> Vec<u8> {
-        vec![self.step]
-    }
-
-    /// Reads the header parameter bytes: exactly one, nonzero.
-    pub fn from_bytes(b: &[u8]) -> Result<Self, Error> {
-        match b {
-            [s] if *s >= 1 => Ok(Params { step: *s }),
-            _ => Err(Error::Format(crate::container::FormatError::InvalidField {
-                field: "predictive coding params",
-                offset: 0,
-                value: b.first().map_or(b.len() as u64, |&s| s as u64),
-                expected: "exactly one byte, the step, 1..=255",
-            })),
-        }
+    /// The header's coding for these parameters.
+    ///
+    /// ```
+    /// use qcs::coding::predictive::Params;
+    /// use qcs::container::Coding;
+    /// assert_eq!(Params::from_quality(80).coding(), Coding::Predictive { step: 5 });
+    /// ```
+    pub fn coding(&self) -> crate::container::Coding {
+        crate::container::Coding::Predictive { step: self.step }
     }
 }
 

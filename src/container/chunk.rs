@@ -1,4 +1,5 @@
-//! Chunk tags and the chunk framing `tag | length varint | payload | CRC-32 LE` (spec/format.md §Chunks).
+//! Chunk tags and the chunk framing `tag | length varint | payload | CRC-32 LE` (spec/format.md
+//! §Chunks); level 0 comes first, without its tag, its CRC covering the header too.
 
 use super::varint;
 
@@ -36,6 +37,28 @@ pub fn tag_name(tag: u8) -> String {
     } else {
         format!("0x{tag:02X}")
     }
+}
+
+/// The bytes of level 0 after the header `header`: the varint payload length, the payload and
+/// the CRC-32 (IEEE, little-endian) over the header, the length bytes and the payload.
+///
+/// Returns `None` if the payload is longer than `u32::MAX` bytes.
+///
+/// ```
+/// let bytes = qcs::container::chunk::encode_first(b"head", b"hi").unwrap();
+/// assert_eq!(&bytes[..3], &[2, b'h', b'i']);
+/// assert_eq!(bytes[3..], crc32fast::hash(b"head\x02hi").to_le_bytes());
+/// ```
+pub fn encode_first(header: &[u8], payload: &[u8]) -> Option<Vec<u8>> {
+    let len = u32::try_from(payload.len()).ok()?;
+    let mut out = Vec::with_capacity(payload.len() + 9);
+    varint::write_u32(&mut out, len);
+    out.extend_from_slice(payload);
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(header);
+    crc.update(&out);
+    out.extend_from_slice(&crc.finalize().to_le_bytes());
+    Some(out)
 }
 
 /// The complete bytes of one chunk: tag, varint length, payload and CRC-32 (IEEE, little-endian)

@@ -5,11 +5,25 @@ use super::FormatError;
 use std::ops::Range;
 
 /// The magic bytes every `.qcs` file starts with.
-pub const MAGIC: [u8; 3] = *b"qcs";
-/// The format version this crate reads and writes.
-pub const VERSION: u8 = 1;
-/// The longest possible header in bytes (all varints at full length, 255 parameter bytes, lattice).
-pub const MAX_HEADER_LEN: usize = 3 + 1 + 1 + 5 + 5 + 1 + 10 + 10 + 1 + 5 + 255 + 5 + 5 + 5 + 4;
+pub const MAGIC: [u8; 2] = *b"qc";
+/// The format version this crate reads and writes (bits 7–5 of the format byte).
+pub const VERSION: u8 = 2;
+/// The longest possible header in bytes (every varint at full length, explicit N, lattice).
+pub const MAX_HEADER_LEN: usize = 2 + 1 + 5 + 5 + 1 + 10 + 10 + 1 + 5 + 5 + 5 + 1;
+
+/// The header's check byte: CRC-8/SMBUS (polynomial 0x07, initial value 0, no reflection, no
+/// final XOR) of every header byte before it. It detects every single-bit error.
+///
+/// ```
+/// assert_eq!(qcs::container::header_check(b"123456789"), 0xF4);
+/// ```
+pub fn header_check(bytes: &[u8]) -> u8 {
+    crc::Crc::<u8>::new(&crc::CRC_8_SMBUS).checksum(bytes)
+}
+
+/// The format byte's bits: lattice fields present, and the coding's and layout's positions.
+const LATTICE_BIT: u8 = 0x10;
+const CODING_SHIFT: u8 = 2;
 
 /// Channels per sample and their order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -61,11 +75,11 @@ pub enum Coding {
         /// Bits per channel value, 1..=8.
         bits: u8,
     },
-    /// Coding 1 (reserved for the predictive coding): its parameter bytes (≤ 255) are passed
-    /// through uninterpreted, and level payload lengths are not checked by the container.
+    /// Coding 1, predictive (see [`crate::coding::predictive`]): its parameter byte (the
+    /// quantisation step, ≥ 1) is passed through; level payload lengths are free.
     Predictive {
-        /// The coding parameter bytes.
-        params: Vec<u8>,
+        /// The quantisation step, 1..=255 (1 is lossless).
+        step: u8,
     },
 }
 
@@ -283,15 +297,16 @@ impl Header {
     /// use qcs::container::{Header, Layout, Coding};
     /// assert!(Header::new(0, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 8 }).validate().is_err());
     /// assert!(Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 9 }).validate().is_err());
+    /// assert!(Header::new(1, 1, Layout::Grey, 1, 1, Coding::Predictive { step: 0 }).validate().is_err());
     /// assert!(Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 1 }).validate().is_ok());
     /// ```
     pub fn validate(&self) -> Result<(), FormatError> {
         // Offsets are unknown here (0); the parser reports real offsets.
-        self.validate_at(&[0; 7])
+        self.validate_at(&[0; 6])
     }
 
-    /// `offsets`: width, height, total, first level, coding params length, coding params, root length.
-    fn validate_at(&self, offsets: &[u64; 7]) -> Result<(), FormatError> {
+    /// `offsets`: width, height, total samples, first level, coding parameter, root length.
+    fn validate_at(&self, offsets: &[u64; 6]) -> Result<(), FormatError> {
         if self.width == 0 {
             return Err(invalid("width", offsets[0], 0, "≥ 1"));
         }
@@ -304,13 +319,13 @@ impl Header {
         if self.first_level == 0 {
             return Err(invalid("first level size", offsets[3], 0, "≥ 1"));
         }
-        match &self.coding {
+        match self.coding {
             Coding::Raw { bits } => {
-                if !(1..=8).contains(bits) {
+                if !(1..=8).contains(&bits) {
                     return Err(invalid(
                         "raw bits per channel",
-                        offsets[5],
-                        *bits as u64,
+                        offsets[4],
+                        bits as u64,
                         "1..=8",
                     ));
                 }
@@ -330,64 +345,80 @@ impl Header {
                     }
                 }
             }
-            Coding::Predictive { params } => {
-                if params.len() > 255 {
-                    return Err(invalid(
-                        "coding params length",
-                        offsets[4],
-                        params.len() as u64,
-                        "≤ 255",
-                    ));
+            Coding::Predictive { step } => {
+                if step == 0 {
+                    return Err(invalid("predictive step", offsets[4], 0, "1..=255"));
                 }
             }
         }
         if let Some(l) = &self.lattice {
             if l.root_length == 0 {
-                return Err(invalid("lattice root length", offsets[6], 0, "≥ 1"));
+                return Err(invalid("lattice root length", offsets[5], 0, "≥ 1"));
             }
         }
         Ok(())
     }
 
-    /// The header's bytes, CRC included.
+    /// The density byte that gives this header's N, or 0 if N must be written out:
+    /// a byte `d` in 1..=255 stands for `N = max(1, ⌊W·H·d / 256⌋)`.
+    ///
+    /// ```
+    /// use qcs::container::{Header, Layout, Coding};
+    /// let h = Header::new(512, 512, Layout::Rgb, 32768, 64, Coding::Predictive { step: 17 });
+    /// assert_eq!(h.density_byte(), 32); // one sample per 8 pixels
+    /// assert_eq!(Header { total_samples: 32769, ..h }.density_byte(), 0);
+    /// ```
+    pub fn density_byte(&self) -> u8 {
+        (1..=255u8)
+            .find(|&d| samples_for_density(self.width, self.height, d) == self.total_samples)
+            .unwrap_or(0)
+    }
+
+    /// The header's bytes, its check byte ([`header_check`]) last. (Level 0's CRC covers the
+    /// header too.)
     ///
     /// ```
     /// use qcs::container::{Header, Layout, Coding};
     /// let bytes = Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 8 }).encode()?;
-    /// assert_eq!(&bytes[..10], &[b'q', b'c', b's', 1, 0, 1, 1, 1, 1, 1]);
-    /// assert_eq!(bytes.len(), 17);
+    /// // "qc", version 2 with raw grey, 1 × 1, density byte 1 (N = 1), L0 = 1, B = 8, check.
+    /// assert_eq!(bytes[..8], [b'q', b'c', 0x40, 1, 1, 1, 1, 8]);
+    /// assert_eq!(bytes[8], qcs::container::header_check(&bytes[..8]));
     /// # Ok::<(), qcs::Error>(())
     /// ```
     pub fn encode(&self) -> Result<Vec<u8>, crate::Error> {
         self.validate()
             .map_err(|e| crate::Error::Parameter(format!("invalid header: {e}")))?;
-        let mut out = Vec::with_capacity(32);
+        let mut out = Vec::with_capacity(16);
         out.extend_from_slice(&MAGIC);
-        out.push(VERSION);
-        out.push(u8::from(self.lattice.is_some()));
+        let lattice = if self.lattice.is_some() {
+            LATTICE_BIT
+        } else {
+            0
+        };
+        out.push(
+            (VERSION << 5)
+                | lattice
+                | (self.coding.id() << CODING_SHIFT)
+                | (self.layout.channels() - 1),
+        );
         varint::write_u32(&mut out, self.width);
         varint::write_u32(&mut out, self.height);
-        out.push(self.layout.channels());
-        varint::write_u64(&mut out, self.total_samples);
-        varint::write_u64(&mut out, self.first_level);
-        out.push(self.coding.id());
-        match &self.coding {
-            Coding::Raw { bits } => {
-                varint::write_u32(&mut out, 1);
-                out.push(*bits);
-            }
-            Coding::Predictive { params } => {
-                varint::write_u32(&mut out, params.len() as u32);
-                out.extend_from_slice(params);
-            }
+        let d = self.density_byte();
+        out.push(d);
+        if d == 0 {
+            varint::write_u64(&mut out, self.total_samples);
         }
+        varint::write_u64(&mut out, self.first_level);
+        out.push(match self.coding {
+            Coding::Raw { bits } => bits,
+            Coding::Predictive { step } => step,
+        });
         if let Some(l) = &self.lattice {
             varint::write_u32(&mut out, l.root_length);
             varint::write_u32(&mut out, varint::zigzag(l.origin_x));
             varint::write_u32(&mut out, varint::zigzag(l.origin_y));
         }
-        let crc = crc32fast::hash(&out);
-        out.extend_from_slice(&crc.to_le_bytes());
+        out.push(header_check(&out));
         Ok(out)
     }
 
@@ -405,10 +436,9 @@ impl Header {
         }
     }
 
-    /// Parses a header from a prefix: `Stop::More` if the bytes end inside it. Errors that change
-    /// how the rest must be read (magic, version, reserved flags, malformed varints, a parameter
-    /// length over 255) are reported as soon as their byte arrives; the value rules after the CRC
-    /// has been checked.
+    /// Parses a header from a prefix: `Stop::More` if the bytes end inside it. Errors in the
+    /// magic, the version and the coding, and malformed varints, are reported as soon as their
+    /// byte arrives; then the check byte; then the value rules.
     pub(crate) fn parse_prefix(bytes: &[u8]) -> Result<(Header, usize), Stop> {
         let mut c = Cursor { bytes, pos: 0 };
         for (i, &m) in MAGIC.iter().enumerate() {
@@ -421,40 +451,42 @@ impl Header {
                 .into());
             }
         }
-        let version = c.u8()?;
-        if version != VERSION {
-            return Err(if version > VERSION {
-                FormatError::UnsupportedVersion { version }
-            } else {
-                invalid("version", 3, version as u64, "1")
+        let format = c.u8()?;
+        if format == b's' {
+            // `qcs` followed by 0x01: the pre-release version-1 layout.
+            if c.u8()? == 1 {
+                return Err(FormatError::UnsupportedVersion { version: 1 }.into());
             }
-            .into());
         }
-        let flags = c.u8()?;
-        if flags & !1 != 0 {
-            return Err(FormatError::ReservedFlags { flags }.into());
+        let version = format >> 5;
+        if version != VERSION {
+            return Err(FormatError::UnsupportedVersion { version }.into());
         }
+        let coding_id = (format >> CODING_SHIFT) & 3;
+        if coding_id > 1 {
+            return Err(invalid("coding", 2, coding_id as u64, "0 (raw) or 1 (predictive)").into());
+        }
+        let layout = Layout::from_channels((format & 3) + 1).unwrap_or(Layout::Grey);
         let (width, o_w) = c.varint("width", 32)?;
         let (height, o_h) = c.varint("height", 32)?;
-        let o_layout = c.pos as u64;
-        let layout_byte = c.u8()?;
-        let (total, o_n) = c.varint("total samples", 64)?;
+        let mut o_n = c.pos as u64;
+        let d = c.u8()?;
+        let total = if d == 0 {
+            let (n, o) = c.varint("total samples", 64)?;
+            o_n = o;
+            n
+        } else {
+            samples_for_density(width as u32, height as u32, d)
+        };
         let (first, o_l0) = c.varint("first level size", 64)?;
-        let o_coding = c.pos as u64;
-        let coding_byte = c.u8()?;
-        let (plen, o_plen) = c.varint("coding params length", 32)?;
-        if plen > 255 {
-            return Err(invalid("coding params length", o_plen, plen, "≤ 255").into());
-        }
-        let o_params = c.pos as u64;
-        let end = c.pos + plen as usize;
-        if bytes.len() < end {
-            return Err(Stop::More);
-        }
-        let params = &bytes[c.pos..end];
-        c.pos = end;
+        let o_param = c.pos as u64;
+        let param = c.u8()?;
+        let coding = match coding_id {
+            0 => Coding::Raw { bits: param },
+            _ => Coding::Predictive { step: param },
+        };
         let mut o_root = 0;
-        let lattice = if flags & 1 != 0 {
+        let lattice = if format & LATTICE_BIT != 0 {
             let (root, o) = c.varint("lattice root length", 32)?;
             o_root = o;
             let (ox, _) = c.varint("lattice origin x", 32)?;
@@ -467,41 +499,17 @@ impl Header {
         } else {
             None
         };
-        let o_crc = c.pos;
-        let mut crc_bytes = [0u8; 4];
-        for b in crc_bytes.iter_mut() {
-            *b = c.u8()?;
-        }
-        let stored = u32::from_le_bytes(crc_bytes);
-        let computed = crc32fast::hash(&bytes[..o_crc]);
+        let o_check = c.pos;
+        let stored = c.u8()?;
+        let computed = header_check(&bytes[..o_check]);
         if stored != computed && !cfg!(fuzzing) {
-            return Err(FormatError::HeaderCrc {
-                offset: o_crc as u64,
+            return Err(FormatError::HeaderCheck {
+                offset: o_check as u64,
                 stored,
                 computed,
             }
             .into());
         }
-        let layout = Layout::from_channels(layout_byte)
-            .ok_or_else(|| invalid("layout", o_layout, layout_byte as u64, "1, 2, 3 or 4"))?;
-        let coding = match coding_byte {
-            0 => {
-                if plen != 1 {
-                    return Err(invalid(
-                        "coding params length",
-                        o_plen,
-                        plen,
-                        "1 for the raw coding",
-                    )
-                    .into());
-                }
-                Coding::Raw { bits: params[0] }
-            }
-            1 => Coding::Predictive {
-                params: params.to_vec(),
-            },
-            other => return Err(invalid("coding", o_coding, other as u64, "0 or 1").into()),
-        };
         let header = Header {
             width: width as u32,
             height: height as u32,
@@ -511,7 +519,12 @@ impl Header {
             coding,
             lattice,
         };
-        header.validate_at(&[o_w, o_h, o_n, o_l0, o_plen, o_params, o_root])?;
+        header.validate_at(&[o_w, o_h, o_n, o_l0, o_param, o_root])?;
         Ok((header, c.pos))
     }
+}
+
+/// N for a density byte `d` ≥ 1: `max(1, ⌊W·H·d / 256⌋)`.
+fn samples_for_density(width: u32, height: u32, d: u8) -> u64 {
+    ((width as u128 * height as u128 * d as u128) >> 8).max(1) as u64
 }

@@ -101,7 +101,9 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
         .and_then(|_| Header::parse(bytes).ok())
         .map(|(_, len)| len as u64);
     let read_len = |c: &ChunkRef| -> Option<u32> {
-        let start = usize::try_from(c.offset).ok()?.checked_add(1)?;
+        // Level 0 has no tag: its length is at its offset.
+        let tag_len = (c.index > 0) as usize;
+        let start = usize::try_from(c.offset).ok()?.checked_add(tag_len)?;
         match varint::read(bytes.get(start..)?, 32) {
             Ok(Some((v, _))) => u32::try_from(v).ok(),
             _ => None,
@@ -245,8 +247,8 @@ impl std::fmt::Display for Inspection {
                     super::Coding::Raw { bits } => {
                         writeln!(f, "coding: raw, {bits} bits per channel")?
                     }
-                    super::Coding::Predictive { params } => {
-                        writeln!(f, "coding: predictive, {} parameter bytes", params.len())?
+                    super::Coding::Predictive { step } => {
+                        writeln!(f, "coding: predictive, step {step}")?
                     }
                 }
                 match &h.lattice {

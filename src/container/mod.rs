@@ -38,7 +38,9 @@ mod parser;
 pub mod varint;
 mod writer;
 
-pub use header::{Coding, Header, LatticeFields, Layout, MAGIC, MAX_HEADER_LEN, VERSION};
+pub use header::{
+    header_check, Coding, Header, LatticeFields, Layout, MAGIC, MAX_HEADER_LEN, VERSION,
+};
 pub use inspect::{inspect, ChunkStatus, InspectedChunk, InspectedLevel, Inspection};
 pub use parser::{EndState, Event, Metadata, Parser, ParserOptions, Progress};
 pub use varint::VarintError;
@@ -75,13 +77,13 @@ impl std::fmt::Display for ChunkRef {
 /// ```
 /// use qcs::container::{FormatError, Parser};
 /// let mut p = Parser::new(Default::default());
-/// let err = p.push(b"qcs\x07", &mut Vec::new()).unwrap_err();
+/// let err = p.push(b"qc\xE0", &mut Vec::new()).unwrap_err();
 /// assert!(matches!(err, qcs::Error::Format(FormatError::UnsupportedVersion { version: 7 })));
 /// ```
 #[derive(Debug, Clone, PartialEq, Eq, ThisError)]
 #[non_exhaustive]
 pub enum FormatError {
-    /// The file does not start with the qcs magic `qcs`.
+    /// The file does not start with the qcs magic `qc`.
     #[error("not a qcs file (bad magic byte 0x{found:02X} at byte {offset})")]
     BadMagic {
         /// Offset of the first wrong byte (0..3).
@@ -97,17 +99,11 @@ pub enum FormatError {
         /// W·H.
         pixels: u64,
     },
-    /// The version byte is not one this decoder reads.
-    #[error("unsupported format version {version} (this decoder reads version 1) at byte 3")]
+    /// The format byte's version (its bits 7–5) is not one this decoder reads.
+    #[error("unsupported format version {version} (this decoder reads version 2) at byte 2")]
     UnsupportedVersion {
         /// The version found.
         version: u8,
-    },
-    /// Reserved flag bits (1–7) are set.
-    #[error("reserved header flag bits set: 0x{flags:02X} at byte 4")]
-    ReservedFlags {
-        /// The whole flags byte.
-        flags: u8,
     },
     /// A header varint is malformed.
     #[error("header field {field} at byte {offset}: {error}")]
@@ -131,17 +127,15 @@ pub enum FormatError {
         /// What the spec allows.
         expected: &'static str,
     },
-    /// The header's CRC does not match its bytes.
-    #[error(
-        "header CRC mismatch at byte {offset}: stored 0x{stored:08X}, computed 0x{computed:08X}"
-    )]
-    HeaderCrc {
-        /// Offset of the CRC field.
+    /// The header's check byte does not match its bytes.
+    #[error("header check byte mismatch at byte {offset}: stored 0x{stored:02X}, computed 0x{computed:02X}")]
+    HeaderCheck {
+        /// Offset of the check byte.
         offset: u64,
-        /// The CRC in the file.
-        stored: u32,
-        /// The CRC of the header bytes.
-        computed: u32,
+        /// The check byte in the file.
+        stored: u8,
+        /// The CRC-8 of the header bytes before it.
+        computed: u8,
     },
     /// A header ended before all its fields (only from [`Header::parse`] on a complete buffer).
     #[error("header truncated at byte {offset}")]
@@ -164,7 +158,8 @@ pub enum FormatError {
         chunk: ChunkRef,
         /// The CRC in the file.
         stored: u32,
-        /// The CRC of the chunk's tag, length and payload.
+        /// The CRC of the chunk's tag, length and payload (level 0: of the header, the
+        /// length and the payload).
         computed: u32,
     },
     /// A level chunk's payload length differs from what the header implies.
@@ -182,12 +177,6 @@ pub enum FormatError {
     /// A critical chunk with a tag this decoder does not know.
     #[error("{chunk}: unknown critical chunk")]
     UnknownCritical {
-        /// The chunk.
-        chunk: ChunkRef,
-    },
-    /// A metadata chunk placed before level 0.
-    #[error("{chunk}: metadata chunk before level 0")]
-    MetadataBeforeFirstLevel {
         /// The chunk.
         chunk: ChunkRef,
     },
@@ -235,7 +224,6 @@ impl FormatError {
             | FormatError::ChunkCrc { chunk, .. }
             | FormatError::LevelLength { chunk, .. }
             | FormatError::UnknownCritical { chunk }
-            | FormatError::MetadataBeforeFirstLevel { chunk }
             | FormatError::ExtraLevel { chunk }
             | FormatError::DuplicateIcc { chunk }
             | FormatError::BadText { chunk, .. } => Some(*chunk),

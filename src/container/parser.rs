@@ -65,7 +65,8 @@ pub enum Metadata {
 /// What the parser found, in file order.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Event {
-    /// The header is complete, its CRC matches and it is within the limits.
+    /// The header is complete, valid and within the limits (its bytes are verified with level
+    /// 0's CRC).
     Header(Header),
     /// A level chunk starts; its payload bytes follow as [`Event::LevelData`].
     LevelStart {
@@ -122,7 +123,7 @@ pub enum Event {
 pub struct Progress {
     /// Bytes consumed from the start of the file (unspecified after a fatal error).
     pub bytes_consumed: u64,
-    /// Whether the header has been parsed and verified.
+    /// Whether the header has been parsed (it is verified with level 0).
     pub header_complete: bool,
     /// Number of levels whose CRC has been verified.
     pub levels_verified: u32,
@@ -519,9 +520,20 @@ impl Parser {
                     .map_err(Fail::Limits)?;
                 self.level_count = header.level_count();
                 self.header = Some(header.clone());
-                self.header_buf = Vec::new();
                 events.push(Event::Header(header));
-                self.state = State::Tag;
+                // Level 0 follows without a tag; its CRC covers the header too.
+                let mut hasher = crc32fast::Hasher::new();
+                hasher.update(&self.header_buf[..len]);
+                self.header_buf = Vec::new();
+                self.state = State::Length {
+                    chunk: ChunkRef {
+                        index: 0,
+                        tag: LEVEL,
+                        offset: len as u64,
+                    },
+                    reader: VarintReader::new(32),
+                    hasher,
+                };
                 Ok(len - before)
             }
         }
@@ -539,10 +551,6 @@ impl Parser {
             }
         } else if !chunk::is_ancillary(tag) {
             return Err(Fail::Format(FormatError::UnknownCritical { chunk }));
-        } else if self.next_level == 0 {
-            return Err(Fail::Format(FormatError::MetadataBeforeFirstLevel {
-                chunk,
-            }));
         } else if tag == ICC && self.seen_icc {
             return Err(Fail::Format(FormatError::DuplicateIcc { chunk }));
         }

@@ -4,7 +4,8 @@ use super::chunk::{self, ICC, LEVEL, TEXT};
 use super::Header;
 use std::io::Write;
 
-/// Writes a header, then level chunks in order, with metadata chunks placed after level 0.
+/// Writes a header, then level 0 (no tag; its CRC covers the header), then the other level
+/// chunks in order, with metadata chunks placed after level 0.
 ///
 /// Metadata given before level 0 is held back and written right after it (the format forbids
 /// metadata before level 0). The caller supplies each level's payload bytes (e.g. from
@@ -18,7 +19,7 @@ use std::io::Write;
 /// w.write_level(&[200])?;
 /// w.write_level(&[100])?;
 /// let file = w.finish()?;
-/// assert_eq!(&file[..3], b"qcs");
+/// assert_eq!(&file[..2], b"qc");
 /// # Ok::<(), qcs::Error>(())
 /// ```
 #[derive(Debug)]
@@ -30,6 +31,8 @@ pub struct ContainerWriter<W: Write> {
     pending: Vec<Vec<u8>>,
     written: u64,
     icc_written: bool,
+    /// The header's bytes, until level 0 (whose CRC covers them) is written.
+    header_bytes: Vec<u8>,
 }
 
 impl<W: Write> ContainerWriter<W> {
@@ -45,6 +48,7 @@ impl<W: Write> ContainerWriter<W> {
             pending: Vec::new(),
             written: bytes.len() as u64,
             icc_written: false,
+            header_bytes: bytes,
         })
     }
 
@@ -75,7 +79,8 @@ impl<W: Write> ContainerWriter<W> {
         Ok(())
     }
 
-    /// Writes the next level's chunk (`L`) with `payload` as its colour data.
+    /// Writes the next level with `payload` as its colour data: level 0 right after the header,
+    /// the others as `L` chunks.
     pub fn write_level(&mut self, payload: &[u8]) -> Result<(), crate::Error> {
         let k = self.next_level;
         if k >= self.level_count {
@@ -92,7 +97,20 @@ impl<W: Write> ContainerWriter<W> {
                 )));
             }
         }
-        self.put(LEVEL, payload)?;
+        if k == 0 {
+            // Level 0 has no tag, and its CRC covers the header.
+            let bytes = chunk::encode_first(&self.header_bytes, payload).ok_or_else(|| {
+                crate::Error::Parameter(format!(
+                    "level 0 payload of {} bytes exceeds 2^32 − 1",
+                    payload.len()
+                ))
+            })?;
+            self.inner.write_all(&bytes)?;
+            self.written += bytes.len() as u64;
+            self.header_bytes = Vec::new();
+        } else {
+            self.put(LEVEL, payload)?;
+        }
         self.next_level += 1;
         for chunk in std::mem::take(&mut self.pending) {
             self.inner.write_all(&chunk)?;
