@@ -67,11 +67,11 @@ impl<W: Write> ContainerWriter<W> {
         self.written
     }
 
-    fn put(&mut self, tag: u8, payload: &[u8]) -> Result<(), crate::Error> {
-        let bytes = chunk::encode(tag, payload).ok_or_else(|| {
+    /// Writes a chunk's bytes (`None`: its payload was too long for the length field).
+    fn put(&mut self, bytes: Option<Vec<u8>>, payload_len: usize) -> Result<(), crate::Error> {
+        let bytes = bytes.ok_or_else(|| {
             crate::Error::Parameter(format!(
-                "chunk payload of {} bytes exceeds 2^32 − 1",
-                payload.len()
+                "chunk payload of {payload_len} bytes exceeds 2^32 − 1"
             ))
         })?;
         self.inner.write_all(&bytes)?;
@@ -97,20 +97,13 @@ impl<W: Write> ContainerWriter<W> {
                 )));
             }
         }
-        if k == 0 {
+        let bytes = if k == 0 {
             // Level 0 has no tag, and its CRC covers the header.
-            let bytes = chunk::encode_first(&self.header_bytes, payload).ok_or_else(|| {
-                crate::Error::Parameter(format!(
-                    "level 0 payload of {} bytes exceeds 2^32 − 1",
-                    payload.len()
-                ))
-            })?;
-            self.inner.write_all(&bytes)?;
-            self.written += bytes.len() as u64;
-            self.header_bytes = Vec::new();
+            chunk::encode_first(&std::mem::take(&mut self.header_bytes), payload)
         } else {
-            self.put(LEVEL, payload)?;
-        }
+            chunk::encode(LEVEL, payload)
+        };
+        self.put(bytes, payload.len())?;
         self.next_level += 1;
         for chunk in std::mem::take(&mut self.pending) {
             self.inner.write_all(&chunk)?;
@@ -143,7 +136,7 @@ impl<W: Write> ContainerWriter<W> {
             self.pending.push(bytes);
             Ok(())
         } else {
-            self.put(tag, payload)
+            self.put(chunk::encode(tag, payload), payload.len())
         }
     }
 
