@@ -9,7 +9,7 @@ use spade::Triangulation as _;
 use super::cells::Cells;
 use super::hull::{colour_of, Boundary};
 use super::mesh::Triangulation;
-use super::raster::{self, Band, RasterTriangle, RasterVertex};
+use super::raster::{self, fmax, fmin, Band, RasterTriangle, RasterVertex};
 use super::{fill_unpainted, Frame};
 use crate::sites::Point;
 
@@ -19,10 +19,14 @@ use crate::sites::Point;
 fn faces(mesh: &Triangulation) -> Vec<[u32; 3]> {
     let mut out = Vec::with_capacity(mesh.num_inner_faces());
     for f in mesh.inner_faces() {
-        let mut idx = f.vertices().map(|v| v.data().index);
-        let first = (0..3).min_by_key(|&k| idx[k]).unwrap_or(0);
-        idx.rotate_left(first);
-        out.push(idx);
+        let [a, b, c] = f.vertices().map(|v| v.data().index);
+        out.push(if a < b && a < c {
+            [a, b, c]
+        } else if b < c {
+            [b, c, a]
+        } else {
+            [c, a, b]
+        });
     }
     out
 }
@@ -208,7 +212,7 @@ pub(crate) fn render(
                 let cell = cells.get(k).unwrap_or(&[]);
                 let ys = cell.iter().map(|&i| y(i));
                 ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                    (a.min(v), b.max(v))
+                    (fmin(v, a), fmax(v, b))
                 })
             };
             let emit = |k: usize, band: &mut Band<'_>| {
@@ -222,8 +226,8 @@ pub(crate) fn render(
         None => {
             let tris = faces(mesh);
             let extent = |k: usize| {
-                let ys = tris[k].map(y);
-                (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]))
+                let [a, b, c] = tris[k].map(y);
+                (fmin(fmin(a, b), c), fmax(fmax(a, b), c))
             };
             let emit =
                 |k: usize, band: &mut Band<'_>| raster::paint(tris[k].map(|i| at(&verts, i)), band);

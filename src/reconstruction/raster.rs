@@ -38,26 +38,62 @@ pub struct RasterVertex {
 /// A triangle to rasterise, vertices in any order (either orientation).
 pub type RasterTriangle = [RasterVertex; 3];
 
-/// `⌈u⌉` for `|u| < 2^62` (callers clamp), without a libm call (baseline x86-64 has no
-/// rounding instruction).
-#[inline]
-fn ceil_i64(u: f64) -> i64 {
-    let t = u as i64;
-    t + ((t as f64) < u) as i64
+/// `max(a, b)`, `b` if either is NaN: one `maxsd` (`f64::max` also orders NaN, at a cost).
+#[inline(always)]
+pub(crate) fn fmax(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
 }
 
-/// The first row `k` in `lo..=hi` whose centre line `k + 0.5` is at or below `y` (`hi` if
-/// none), exactly.
-#[inline]
+/// `min(a, b)`, `b` if either is NaN.
+#[inline(always)]
+pub(crate) fn fmin(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// 1.5·2^52: adding it to an `f64` of magnitude below 2^51 rounds it to an integer, which
+/// its bits then hold (minus those of `MAGIC`), with no float → int conversion.
+const MAGIC: f64 = 6_755_399_441_055_744.0;
+
+/// `u` rounded to the nearest integer (ties to even), for `|u| < 2^51`.
+#[inline(always)]
+fn round_i64(u: f64) -> i64 {
+    ((u + MAGIC).to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64)
+}
+
+/// `⌊u⌋` for `|u| < 2^51`.
+#[inline(always)]
+fn floor_i64(u: f64) -> i64 {
+    let (c, d) = ceil_frac(u);
+    c - (d > 0.0) as i64
+}
+
+/// `⌈u⌉` for `|u| < 2^51`, and `⌈u⌉ − u`.
+#[inline(always)]
+fn ceil_frac(u: f64) -> (i64, f64) {
+    let r = (u + MAGIC) - MAGIC;
+    let n = round_i64(u);
+    let d = r - u;
+    if d < 0.0 {
+        (n + 1, d + 1.0)
+    } else {
+        (n, d)
+    }
+}
+
+/// The first row `k` in `lo..=hi` (`0 ≤ lo ≤ hi < 2^51`) whose centre line `k + 0.5` is at
+/// or below `y` (`hi` if none): `⌈y − 0.5⌉` clamped, exact because `y − 0.5` is exact in
+/// `f64` for `0.25 ≤ y < 2^52`, and either side of that range the clamp decides.
+#[inline(always)]
 fn first_row(y: f64, lo: i64, hi: i64) -> i64 {
-    let mut k = ceil_i64((y - 0.5).max(lo as f64).min(hi as f64));
-    while k > lo && (k - 1) as f64 + 0.5 >= y {
-        k -= 1;
-    }
-    while k < hi && (k as f64 + 0.5) < y {
-        k += 1;
-    }
-    k
+    ceil_frac(fmin(fmax(y - 0.5, lo as f64), hi as f64)).0
 }
 
 /// A non-horizontal edge from its upper end `a` to its lower end `b`, as a function of the row.
@@ -65,10 +101,13 @@ fn first_row(y: f64, lo: i64, hi: i64) -> i64 {
 struct Edge {
     a: [f64; 2],
     b: [f64; 2],
+    /// `a.x − 0.5`.
+    ah: f64,
     /// dx / dy.
     slope: f64,
-    /// Bound on the rounding error of the crossing computed by [`Edge::first`].
+    /// Bound on the rounding error of the crossing computed by [`Edge::first`], and 1 − it.
     margin: f64,
+    margin1: f64,
 }
 
 impl Edge {
@@ -86,8 +125,10 @@ impl Edge {
         Edge {
             a,
             b,
+            ah: a[0] - 0.5,
             slope,
             margin,
+            margin1: 1.0 - margin,
         }
     }
 
@@ -111,13 +152,14 @@ impl Edge {
     /// of the edge, `⌈x − 0.5⌉` for the crossing `x`, clamped to `0..=w`.
     #[inline]
     fn first(&self, yc: f64, w: i64) -> i64 {
-        let wf = w as f64;
-        let u = self.a[0] + (yc - self.a[1]) * self.slope - 0.5;
-        let i = ceil_i64(u.max(-1.0).min(wf + 1.0));
-        let d = i as f64 - u;
-        if d >= self.margin && d <= 1.0 - self.margin {
+        let u = self.ah + (yc - self.a[1]) * self.slope;
+        // Left of the picture (u < 0) the answer is 0; `first_exact` sees to u < −1 + margin.
+        let c = fmin(fmax(u, 0.0), 1e15);
+        let (i, d) = ceil_frac(c);
+        let d = d + (c - u);
+        if d >= self.margin && d <= self.margin1 {
             // No integer within rounding distance of u: ⌈u⌉ is exact.
-            return i.clamp(0, w);
+            return i.min(w);
         }
         self.first_exact(yc, u, i, w)
     }
@@ -166,8 +208,8 @@ fn scan(p: [[f64; 2]; 3], (lo, hi): (i64, i64), w: i64, mut span: impl FnMut(i64
         return;
     }
     // Columns: a centre at the rightmost x is never inside (right edges exclude it).
-    let xmin = t[0].min(m[0]).min(b[0]);
-    let xmax = t[0].max(m[0]).max(b[0]);
+    let xmin = fmin(fmin(t[0], m[0]), b[0]);
+    let xmax = fmax(fmax(t[0], m[0]), b[0]);
     if !(xmax > 0.5 && xmin <= w as f64 - 0.5) {
         return;
     }
@@ -198,28 +240,35 @@ fn scan(p: [[f64; 2]; 3], (lo, hi): (i64, i64), w: i64, mut span: impl FnMut(i64
     }
 }
 
-/// A triangle's colour plane: the colour at `(x0, y0)` and its gradient.
-struct Plane {
+/// Fraction bits of the fixed-point colours of [`Plane`].
+const FRAC: u32 = 32;
+
+/// A triangle's colour plane: the colour at `(x0, y0)` and its gradient, in `f64`, and the
+/// same plane in fixed point over pixel indices when it is tame enough (see [`Plane::new`]).
+struct Plane<const C: usize> {
     x0: f64,
     y0: f64,
-    c0: [f64; 4],
-    gx: [f64; 4],
-    gy: [f64; 4],
+    c0: [f64; C],
+    gx: [f64; C],
+    gy: [f64; C],
+    /// Anchor pixel `(ia, ja)`, colour + ½ there and steps per pixel in x and y, all scaled
+    /// by 2^FRAC; `None` for the `f64` path.
+    fixed: Option<((i64, i64), [[i64; C]; 3])>,
 }
 
-impl Plane {
+impl<const C: usize> Plane<C> {
     #[inline(always)]
-    fn new(v: [&RasterVertex; 3]) -> Plane {
+    fn new(v: [&RasterVertex; 3]) -> Self {
         let [p0, p1, p2] = v.map(|v| v.pos);
         let (d1x, d1y) = (p1[0] - p0[0], p1[1] - p0[1]);
         let (d2x, d2y) = (p2[0] - p0[0], p2[1] - p0[1]);
         let inv = 1.0 / (d1x * d2y - d1y * d2x);
         // A triangle too thin for its area to be a float is drawn in its first colour.
         let inv = if inv.is_finite() { inv } else { 0.0 };
-        let mut c0 = [0.0; 4];
-        let mut gx = [0.0; 4];
-        let mut gy = [0.0; 4];
-        for k in 0..4 {
+        let mut c0 = [0.0; C];
+        let mut gx = [0.0; C];
+        let mut gy = [0.0; C];
+        for k in 0..C {
             let a = v[0].colour[k] as f64;
             let e1 = v[1].colour[k] as f64 - a;
             let e2 = v[2].colour[k] as f64 - a;
@@ -227,27 +276,71 @@ impl Plane {
             gx[k] = (e1 * d2y - e2 * d1y) * inv;
             gy[k] = (e2 * d1x - e1 * d2x) * inv;
         }
+        // Fixed point when every number fits with room to spare: colours within ±2^10,
+        // gradients below 2^8 per pixel and the triangle under 2^20 pixels across, so that
+        // products stay below 2^61 and the rounding of the steps (2^-33 each) adds up to less
+        // than 2^-12 across the triangle.
+        let ext = fmax(fmax(d1x.abs(), d2x.abs()), fmax(d1y.abs(), d2y.abs()));
+        let mut tame = ext < (1 << 20) as f64 && p0[0].abs() < 1e15 && p0[1].abs() < 1e15;
+        let (ia, ja) = if tame {
+            (floor_i64(p0[0]), floor_i64(p0[1]))
+        } else {
+            (0, 0)
+        };
+        let one = (1u64 << FRAC) as f64;
+        let mut f = [[0i64; C]; 3];
+        let (dx, dy) = (ia as f64 + 0.5 - p0[0], ja as f64 + 0.5 - p0[1]);
+        for k in 0..C {
+            let at = c0[k] + gx[k] * dx + gy[k] * dy + 0.5;
+            tame &= at.abs() < 1024.0 && gx[k].abs() < 256.0 && gy[k].abs() < 256.0;
+            f[0][k] = round_i64(at * one);
+            f[1][k] = round_i64(gx[k] * one);
+            f[2][k] = round_i64(gy[k] * one);
+        }
         Plane {
             x0: p0[0],
             y0: p0[1],
             c0,
             gx,
             gy,
+            fixed: tame.then_some(((ia, ja), f)),
         }
     }
 
-    /// Colour (first `C` channels) at pixel centre `(i + 0.5, j + 0.5)` and its step along x.
+    /// Paints `px`, the pixels `i0..` of row `j` (`C` channels each): each channel of the
+    /// plane at the pixel centre, rounded half up and clamped to 0..=255.
     #[inline(always)]
-    fn start<const C: usize>(&self, i: i64, j: i64) -> ([f32; C], [f32; C]) {
-        let dx = i as f64 + 0.5 - self.x0;
-        let dy = j as f64 + 0.5 - self.y0;
-        let mut v = [0f32; C];
-        let mut g = [0f32; C];
-        for k in 0..C {
-            v[k] = (self.c0[k] + self.gx[k] * dx + self.gy[k] * dy) as f32;
-            g[k] = self.gx[k] as f32;
+    fn fill(&self, px: &mut [u8], i0: i64, j: i64) {
+        let n = (px.len() / C) as i64;
+        if let Some(((ia, ja), [k0, kx, ky])) = &self.fixed {
+            // Integer part of the fixed-point colour (+ ½) is the byte. Inside the triangle
+            // the colour is within its vertices', so (but for rounding) within 0..=255; if
+            // both ends of the span are, so is every pixel between, and no clamp is needed.
+            let (di, dj) = (i0 - ia, j - ja);
+            let mut v = [0i64; C];
+            let mut out = 0i64;
+            for k in 0..C {
+                v[k] = k0[k] + kx[k] * di + ky[k] * dj;
+                out |= v[k] | (v[k] + kx[k] * (n - 1));
+            }
+            if out >> (FRAC + 8) == 0 {
+                for p in px.chunks_exact_mut(C) {
+                    for k in 0..C {
+                        p[k] = (v[k] >> FRAC) as u8;
+                        v[k] += kx[k];
+                    }
+                }
+                return;
+            }
         }
-        (v, g)
+        let dy = j as f64 + 0.5 - self.y0;
+        for (i, p) in (i0..).zip(px.chunks_exact_mut(C)) {
+            let dx = i as f64 + 0.5 - self.x0;
+            for k in 0..C {
+                // Saturating float → int cast: clamps to 0..=255.
+                p[k] = (self.c0[k] + self.gx[k] * dx + self.gy[k] * dy + 0.5) as u8;
+            }
+        }
     }
 }
 
@@ -272,19 +365,12 @@ fn paint_c<const C: usize>(v: [&RasterVertex; 3], band: &mut Band<'_>) {
     let mut painted = band.painted.as_deref_mut();
     let row0 = band.row0;
     scan(v.map(|v| v.pos), rows, w as i64, |j, i0, i1| {
-        let plane = plane.get_or_insert_with(|| Plane::new(v));
-        let (mut v, g) = plane.start::<C>(i0, j);
+        let plane = plane.get_or_insert_with(|| Plane::<C>::new(v));
         let base = (j as usize - row0) * w;
-        let (i0, i1) = (base + i0 as usize, base + i1 as usize);
-        for p in pixels[i0 * C..i1 * C].chunks_exact_mut(C) {
-            for k in 0..C {
-                // Saturating float → int cast: rounds half up and clamps to 0..=255.
-                p[k] = (v[k] + 0.5) as u8;
-                v[k] += g[k];
-            }
-        }
+        let (o0, o1) = (base + i0 as usize, base + i1 as usize);
+        plane.fill(&mut pixels[o0 * C..o1 * C], i0, j);
         if let Some(m) = painted.as_deref_mut() {
-            m[i0..i1].fill(true);
+            m[o0..o1].fill(true);
         }
     });
 }
@@ -335,9 +421,9 @@ where
     // [y0, y1), widened by a margin far beyond rounding).
     let span = |g: usize| {
         let (y0, y1) = y_extent(g);
-        let m = 1e-7 * (1.0 + y0.abs().max(y1.abs()));
-        let r0 = ceil_i64((y0 - 0.5 - m).max(-1.0).min(h as f64));
-        let r1 = ceil_i64((y1 - 0.5 + m).max(-1.0).min(h as f64)).min(h as i64) - 1;
+        let m = 1e-7 * (1.0 + fmax(y0.abs(), y1.abs()));
+        let row = |y: f64| ceil_frac(fmin(fmax(y, -1.0), h as f64)).0;
+        let (r0, r1) = (row(y0 - 0.5 - m), row(y1 - 0.5 + m).min(h as i64) - 1);
         (r0 <= r1).then_some((r0.max(0) as usize / BAND, r1.max(0) as usize / BAND))
     };
     let spans: Vec<Option<(usize, usize)>> = (0..groups).map(span).collect();
@@ -396,8 +482,8 @@ where
 
 /// The y extent of a triangle.
 fn y_extent(t: &RasterTriangle) -> (f64, f64) {
-    let ys = t.map(|v| v.pos[1]);
-    (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]))
+    let [a, b, c] = t.map(|v| v.pos[1]);
+    (fmin(fmin(a, b), c), fmax(fmax(a, b), c))
 }
 
 /// How many triangles claim each pixel of a `width × height` output (row-major).
