@@ -108,11 +108,13 @@ struct Edge {
     /// Bound on the rounding error of the crossing computed by [`Edge::first`], and 1 − it.
     margin: f64,
     margin1: f64,
+    /// Whether both ends are within the picture's centres (`0.5 ≤ x ≤ w − 0.5`).
+    inner: bool,
 }
 
 impl Edge {
     #[inline]
-    fn new(a: [f64; 2], b: [f64; 2]) -> Edge {
+    fn new(a: [f64; 2], b: [f64; 2], w: i64) -> Edge {
         let slope = (b[0] - a[0]) / (b[1] - a[1]);
         // For a row between a and b, |t| ≤ |bx − ax| and the operations of `first` add up to
         // less than 10·2^-53·(|ax| + |bx| + 1); the margin is three times that. An edge too
@@ -129,6 +131,7 @@ impl Edge {
             slope,
             margin,
             margin1: 1.0 - margin,
+            inner: fmin(a[0], b[0]) >= 0.5 && fmax(a[0], b[0]) <= w as f64 - 0.5,
         }
     }
 
@@ -153,6 +156,14 @@ impl Edge {
     #[inline]
     fn first(&self, yc: f64, w: i64) -> i64 {
         let u = self.ah + (yc - self.a[1]) * self.slope;
+        if self.inner {
+            // u is within 0..=w − 1 (but for rounding, which `first_exact` sees to).
+            let (i, d) = ceil_frac(u);
+            if d >= self.margin && d <= self.margin1 {
+                return i;
+            }
+            return self.first_exact(yc, u, i, w);
+        }
         // Left of the picture (u < 0) the answer is 0; `first_exact` sees to u < −1 + margin.
         let c = fmin(fmax(u, 0.0), 1e15);
         let (i, d) = ceil_frac(c);
@@ -220,7 +231,7 @@ fn scan(p: [[f64; 2]; 3], (lo, hi): (i64, i64), w: i64, mut span: impl FnMut(i64
     }
     // The long edge t → b is on the left when m is right of it (clockwise with y down).
     let long_left = o < 0.0;
-    let long = Edge::new(t, b);
+    let long = Edge::new(t, b, w);
     let rm = first_row(m[1], r0, r1);
     let mut run = |e: Edge, rows: std::ops::Range<i64>| {
         let (l, r) = if long_left { (&long, &e) } else { (&e, &long) };
@@ -233,10 +244,10 @@ fn scan(p: [[f64; 2]; 3], (lo, hi): (i64, i64), w: i64, mut span: impl FnMut(i64
         }
     };
     if r0 < rm {
-        run(Edge::new(t, m), r0..rm);
+        run(Edge::new(t, m, w), r0..rm);
     }
     if rm < r1 {
-        run(Edge::new(m, b), rm..r1);
+        run(Edge::new(m, b, w), rm..r1);
     }
 }
 
@@ -276,12 +287,19 @@ impl<const C: usize> Plane<C> {
             gx[k] = (e1 * d2y - e2 * d1y) * inv;
             gy[k] = (e2 * d1x - e1 * d2x) * inv;
         }
-        // Fixed point when every number fits with room to spare: colours within ±2^10,
-        // gradients below 2^8 per pixel and the triangle under 2^20 pixels across, so that
-        // products stay below 2^61 and the rounding of the steps (2^-33 each) adds up to less
-        // than 2^-12 across the triangle.
+        // Fixed point when every number fits with room to spare: vertex colours within
+        // 0..=255, gradients below 2^8 per pixel and the triangle under 2^20 pixels across, so
+        // that products stay below 2^61 and the rounding of the steps (2^-33 each) adds up to
+        // less than 2^-12 across the triangle. Every centre a triangle paints is inside it
+        // (the fill rule is exact), where the plane is between its vertex colours: the
+        // fixed-point colour + ½ is then within [2^-2, 256 − 2^-2), its integer part a byte.
         let ext = fmax(fmax(d1x.abs(), d2x.abs()), fmax(d1y.abs(), d2y.abs()));
         let mut tame = ext < (1 << 20) as f64 && p0[0].abs() < 1e15 && p0[1].abs() < 1e15;
+        for v in v {
+            for &c in &v.colour[..C] {
+                tame &= (0.0..=255.0).contains(&c);
+            }
+        }
         let (ia, ja) = if tame {
             (floor_i64(p0[0]), floor_i64(p0[1]))
         } else {
@@ -311,27 +329,20 @@ impl<const C: usize> Plane<C> {
     /// plane at the pixel centre, rounded half up and clamped to 0..=255.
     #[inline(always)]
     fn fill(&self, px: &mut [u8], i0: i64, j: i64) {
-        let n = (px.len() / C) as i64;
         if let Some(((ia, ja), [k0, kx, ky])) = &self.fixed {
-            // Integer part of the fixed-point colour (+ ½) is the byte. Inside the triangle
-            // the colour is within its vertices', so (but for rounding) within 0..=255; if
-            // both ends of the span are, so is every pixel between, and no clamp is needed.
+            // The integer part of the fixed-point colour (+ ½) is the byte (see `new`).
             let (di, dj) = (i0 - ia, j - ja);
             let mut v = [0i64; C];
-            let mut out = 0i64;
             for k in 0..C {
                 v[k] = k0[k] + kx[k] * di + ky[k] * dj;
-                out |= v[k] | (v[k] + kx[k] * (n - 1));
             }
-            if out >> (FRAC + 8) == 0 {
-                for p in px.chunks_exact_mut(C) {
-                    for k in 0..C {
-                        p[k] = (v[k] >> FRAC) as u8;
-                        v[k] += kx[k];
-                    }
+            for p in px.chunks_exact_mut(C) {
+                for k in 0..C {
+                    p[k] = (v[k] >> FRAC) as u8;
+                    v[k] += kx[k];
                 }
-                return;
             }
+            return;
         }
         let dy = j as f64 + 0.5 - self.y0;
         for (i, p) in (i0..).zip(px.chunks_exact_mut(C)) {
