@@ -262,10 +262,13 @@ struct Plane<const C: usize> {
     c0: [f64; C],
     gx: [f64; C],
     gy: [f64; C],
-    /// Anchor pixel `(ia, ja)`, colour + ½ there and steps per pixel in x and y, all scaled
-    /// by 2^FRAC; `None` for the `f64` path.
-    fixed: Option<((i64, i64), [[i64; C]; 3])>,
+    /// The plane in fixed point; `None` for the `f64` path.
+    fixed: Option<Fixed<C>>,
 }
+
+/// Anchor pixel `(ia, ja)`, then the colour + ½ there and the steps per pixel in x and y,
+/// each scaled by 2^FRAC.
+type Fixed<const C: usize> = ((i64, i64), [[i64; C]; 3]);
 
 impl<const C: usize> Plane<C> {
     #[inline(always)]
