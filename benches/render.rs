@@ -5,6 +5,11 @@
 //!
 //! Run: `cargo bench --bench render -- --warm-up-time 1 --measurement-time 3`
 //!
+//! `render_1mpx_single/raster_only` is `rasterise` on spade's triangles (prepared once, with
+//! the painted mask it returns); `gouraud` is the whole render from the sample set: point
+//! and triangle set-up, binning, rasterising, the outside-the-hull rule (nothing to do here:
+//! the hull of the samples and mirror points holds the picture, so no mask is kept).
+//!
 //! Instruction counts (stable on a loaded machine): `QCS_ONCE=<workload>` runs one workload a
 //! fixed number of times instead of criterion, e.g.
 //! `QCS_ONCE=gouraud:65536 valgrind --tool=callgrind --toggle-collect='*render_with*' target/release/deps/render-*`

@@ -426,6 +426,131 @@ fn rasteriser_paints_each_pixel_once() {
     }
 }
 
+/// Fans of triangles around a centre, spokes reaching `far` away (some along rows, columns
+/// and diagonals through pixel centres): every centre of a small picture is painted exactly
+/// once, however far the vertices (the crossings are then decided by the exact predicate).
+#[test]
+fn rasteriser_is_exact_with_far_vertices() {
+    use qcs::reconstruction::RasterVertex;
+    let v = |p: [f64; 2]| RasterVertex {
+        pos: p,
+        colour: [0.0; 4],
+    };
+    let dirs = [
+        [1.0, 0.0],
+        [1.0, 1.0],
+        [0.3, 1.0],
+        [0.0, 1.0],
+        [-1.0, 1.0],
+        [-1.0, 0.0],
+        [-1.0, -0.7],
+        [0.0, -1.0],
+        [1.0, -1.0],
+    ];
+    for far in [20.0, 1e9, 1e30, 1e60, 1e150] {
+        for centre in [[5.5, 5.5], [5.0, 6.0], [5.25, 5.5], [0.5, 10.5]] {
+            let tips: Vec<[f64; 2]> = dirs
+                .iter()
+                .map(|d| [centre[0] + far * d[0], centre[1] + far * d[1]])
+                .collect();
+            let tris: Vec<_> = (0..tips.len())
+                .map(|k| [v(centre), v(tips[k]), v(tips[(k + 1) % tips.len()])])
+                .collect();
+            for (w, h) in [(11, 11), (7, 13)] {
+                let cover = raster_coverage(&tris, w, h);
+                assert!(
+                    cover.iter().all(|&n| n == 1),
+                    "far {far}, centre {centre:?}, {w}x{h}: {cover:?}"
+                );
+            }
+        }
+    }
+}
+
+/// Every painted pixel is the triangle's plane at its centre, rounded and clamped, also for
+/// planes too steep or colours too far out of range for the fixed-point span loop.
+#[test]
+fn rasterise_matches_the_plane() {
+    use qcs::reconstruction::{rasterise, RasterVertex};
+    let mut rng = Rng(9);
+    let (w, h) = (37u32, 29u32);
+    for case in 0..400 {
+        let scale = [2.0, 40.0, 0.7][case % 3];
+        let mut tri = [RasterVertex::default(); 3];
+        for v in &mut tri {
+            v.pos = [rng.f() * 50.0 - 6.0, rng.f() * 40.0 - 6.0];
+            for c in &mut v.colour {
+                *c = ((rng.f() - 0.5) * 255.0 * scale + 128.0) as f32;
+            }
+        }
+        if case % 7 == 0 {
+            // A sliver: steep across it.
+            tri[2].pos = [
+                (tri[0].pos[0] + tri[1].pos[0]) / 2.0 + 0.01,
+                (tri[0].pos[1] + tri[1].pos[1]) / 2.0,
+            ];
+        }
+        let (img, painted) = rasterise(&[tri], w, h, 3);
+        let [a, b, c] = tri.map(|v| v.pos);
+        let det = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        for j in 0..h as usize {
+            for i in 0..w as usize {
+                if !painted[j * w as usize + i] {
+                    continue;
+                }
+                let q = [i as f64 + 0.5, j as f64 + 0.5];
+                let l1 = ((q[0] - a[0]) * (c[1] - a[1]) - (q[1] - a[1]) * (c[0] - a[0])) / det;
+                let l2 = ((b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0])) / det;
+                for k in 0..3 {
+                    let col = |v: usize| tri[v].colour[k] as f64;
+                    let want = (col(0) + l1 * (col(1) - col(0)) + l2 * (col(2) - col(0)))
+                        .clamp(0.0, 255.0);
+                    let got = img[(j * w as usize + i) * 3 + k] as f64;
+                    assert!(
+                        (got - want).abs() <= 0.501 + 1e-6 / det.abs(),
+                        "case {case} pixel ({i},{j}) channel {k}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Samples far outside the picture (up to the ±2^200 the API accepts) still draw it: here a
+/// constant colour.
+#[test]
+fn far_samples_render() {
+    for far in [1e6, 1e60, 2f64.powi(199)] {
+        let pts = [[-far, -far], [far, -far * 0.5], [3.0, far], [20.0, 7.0]];
+        let colours = [40u8, 90, 200].repeat(4);
+        let img = render_with(
+            (30, 20),
+            3,
+            &pts,
+            &colours,
+            Method::Gouraud,
+            23,
+            17,
+            single(),
+        );
+        assert!(img.chunks_exact(3).all(|p| p == [40, 90, 200]), "far {far}");
+    }
+    // Samples right of the picture: their hull misses it, the outside rule paints it all.
+    let pts = [[150.0, 10.0], [190.0, 12.0], [170.0, 60.0], [160.0, 30.0]];
+    let colours = [7u8, 250, 31].repeat(4);
+    let img = render_with(
+        (100, 80),
+        3,
+        &pts,
+        &colours,
+        Method::Gouraud,
+        41,
+        33,
+        single(),
+    );
+    assert!(img.chunks_exact(3).all(|p| p == [7, 250, 31]));
+}
+
 #[test]
 fn incremental_equals_one_shot() {
     let mut rng = Rng(7);

@@ -9,9 +9,52 @@ use spade::Triangulation as _;
 use super::cells::Cells;
 use super::hull::{colour_of, Boundary};
 use super::mesh::Triangulation;
-use super::raster::{self, Band, RasterTriangle, RasterVertex};
+use super::raster::{self, fmax, fmin, Band, RasterTriangle, RasterVertex};
 use super::{fill_unpainted, Frame};
 use crate::sites::Point;
+
+/// The inner faces of `mesh` as triples of point indices, each starting from its smallest
+/// index, so the same triangle always gives the same arithmetic whichever way the mesh was
+/// built.
+fn faces(mesh: &Triangulation) -> Vec<[u32; 3]> {
+    let mut out = Vec::with_capacity(mesh.num_inner_faces());
+    for f in mesh.inner_faces() {
+        let [a, b, c] = f.vertices().map(|v| v.data().index);
+        out.push(if a < b && a < c {
+            [a, b, c]
+        } else if b < c {
+            [b, c, a]
+        } else {
+            [c, a, b]
+        });
+    }
+    out
+}
+
+/// Every point as a [`RasterVertex`]: position in output pixels (multiplied by `scale`) and
+/// colour.
+fn vertices(
+    positions: &[Point],
+    colours: &[u8],
+    channels: usize,
+    scale: [f64; 2],
+) -> Vec<RasterVertex> {
+    let vertex = |(k, p): (usize, &Point)| RasterVertex {
+        pos: [p[0] * scale[0], p[1] * scale[1]],
+        colour: colour_of(colours, channels, k),
+    };
+    positions.iter().enumerate().map(vertex).collect()
+}
+
+/// Vertex `i`, or the origin in black for an index out of range.
+#[inline]
+fn at(vertices: &[RasterVertex], i: u32) -> &RasterVertex {
+    const NONE: &RasterVertex = &RasterVertex {
+        pos: [0.0; 2],
+        colour: [0.0; 4],
+    };
+    vertices.get(i as usize).unwrap_or(NONE)
+}
 
 /// The inner faces of `mesh` as [`RasterTriangle`]s in output pixels (positions multiplied by
 /// `scale`), each with its vertices' colours.
@@ -24,24 +67,17 @@ pub fn triangles(
     channels: usize,
     scale: [f64; 2],
 ) -> Vec<RasterTriangle> {
-    let mut out = Vec::with_capacity(mesh.num_inner_faces());
-    for f in mesh.inner_faces() {
-        let vs = f.vertices();
-        let mut tri = [RasterVertex::default(); 3];
-        let mut idx = [0u32; 3];
-        for (k, v) in vs.iter().enumerate() {
-            let p = v.position();
-            idx[k] = v.data().index;
-            tri[k] = RasterVertex {
-                pos: [p.x * scale[0], p.y * scale[1]],
-                colour: colour_of(colours, channels, idx[k] as usize),
-            };
+    let mut positions = vec![[0.0; 2]; mesh.num_vertices()];
+    for v in mesh.vertices() {
+        let (i, p) = (v.data().index as usize, v.position());
+        if i >= positions.len() {
+            positions.resize(i + 1, [0.0; 2]);
         }
-        let first = (0..3).min_by_key(|&k| idx[k]).unwrap_or(0);
-        tri.rotate_left(first);
-        out.push(tri);
+        positions[i] = [p.x, p.y];
     }
-    out
+    let verts = vertices(&positions, colours, channels, scale);
+    let tri = |f: [u32; 3]| f.map(|i| *at(&verts, i));
+    faces(mesh).into_iter().map(tri).collect()
 }
 
 /// The canonical cells as [`RasterTriangle`]s in output pixels (positions multiplied by
@@ -75,16 +111,18 @@ pub fn cell_triangles(
     channels: usize,
     scale: [f64; 2],
 ) -> Vec<RasterTriangle> {
+    let verts = vertices(positions, colours, channels, scale);
     let mut out = Vec::with_capacity(positions.len() * 2 + 8);
     for cell in cells.iter() {
-        cell_fan(cell, positions, colours, channels, scale, &mut |t| {
-            out.push(*t)
+        cell_fan(cell, positions, colours, channels, scale, &verts, |t| {
+            out.push(t.map(|v| *v))
         });
     }
     out
 }
 
-/// The triangles of one cell (see [`cell_triangles`]), given to `f` in order.
+/// The triangles of one cell (see [`cell_triangles`]), given to `f` in order; `verts` are the
+/// points as [`vertices`].
 #[inline]
 fn cell_fan(
     cell: &[u32],
@@ -92,21 +130,15 @@ fn cell_fan(
     colours: &[u8],
     channels: usize,
     scale: [f64; 2],
-    f: &mut dyn FnMut(&RasterTriangle),
+    verts: &[RasterVertex],
+    mut f: impl FnMut([&RasterVertex; 3]),
 ) {
-    let vertex = |i: u32| {
-        let p = positions.get(i as usize).copied().unwrap_or_default();
-        RasterVertex {
-            pos: [p[0] * scale[0], p[1] * scale[1]],
-            colour: colour_of(colours, channels, i as usize),
-        }
-    };
     let k = cell.len();
     if k < 3 {
         return;
     }
     if k == 3 {
-        f(&[vertex(cell[0]), vertex(cell[1]), vertex(cell[2])]);
+        f([at(verts, cell[0]), at(verts, cell[1]), at(verts, cell[2])]);
         return;
     }
     let mut sum_pos = [0f64; 2];
@@ -126,10 +158,10 @@ fn cell_fan(
         pos: [sum_pos[0] / kf * scale[0], sum_pos[1] / kf * scale[1]],
         colour: sum_col.map(|v| v as f32 / k as f32),
     };
-    let mut prev = vertex(cell[0]);
+    let mut prev = at(verts, cell[0]);
     for s in 0..k {
-        let next = vertex(cell[(s + 1) % k]);
-        f(&[centre, prev, next]);
+        let next = at(verts, cell[(s + 1) % k]);
+        f([&centre, prev, next]);
         prev = next;
     }
 }
@@ -165,32 +197,41 @@ pub(crate) fn render(
         }
         None => Boundary::new(mesh, colours, c),
     };
+    // The fill rule paints every pixel centre inside the hull exactly once: when the hull
+    // holds the corner pixel centres it holds them all, and no mask is needed.
+    let (iw, jh) = (w.max(1) - 1, h.max(1) - 1);
+    let corners = [(0, 0), (iw, 0), (0, jh), (iw, jh)].map(|(i, j)| frame.source_point(i, j));
+    let mask = !boundary.contains(&corners);
     let finish = |band: &mut Band<'_>| fill_unpainted(band, frame, &boundary);
-    let y = |p: Point| p[1] * scale[1];
+    let verts = vertices(positions, colours, c, scale);
+    let y = |i: u32| at(&verts, i).pos[1];
+    let opts = (parallel, mask);
     match cells {
         Some(cells) => {
             let extent = |k: usize| {
                 let cell = cells.get(k).unwrap_or(&[]);
-                let ys = cell.iter().map(|&i| y(positions[i as usize]));
+                let ys = cell.iter().map(|&i| y(i));
                 ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                    (a.min(v), b.max(v))
+                    (fmin(v, a), fmax(v, b))
                 })
             };
-            let emit = |k: usize, f: &mut dyn FnMut(&RasterTriangle)| {
+            let emit = |k: usize, band: &mut Band<'_>| {
                 if let Some(cell) = cells.get(k) {
-                    cell_fan(cell, positions, colours, c, scale, f);
+                    let paint = |t: [&RasterVertex; 3]| raster::paint(t, band);
+                    cell_fan(cell, positions, colours, c, scale, &verts, paint);
                 }
             };
-            raster::paint_groups(cells.len(), extent, emit, (w, h, c), parallel, finish).0
+            raster::paint_groups(cells.len(), extent, emit, (w, h, c), opts, finish).0
         }
         None => {
-            let tris = triangles(mesh, colours, c, scale);
+            let tris = faces(mesh);
             let extent = |k: usize| {
-                let ys = tris[k].map(|v| v.pos[1]);
-                (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]))
+                let [a, b, c] = tris[k].map(y);
+                (fmin(fmin(a, b), c), fmax(fmax(a, b), c))
             };
-            let emit = |k: usize, f: &mut dyn FnMut(&RasterTriangle)| f(&tris[k]);
-            raster::paint_groups(tris.len(), extent, emit, (w, h, c), parallel, finish).0
+            let emit =
+                |k: usize, band: &mut Band<'_>| raster::paint(tris[k].map(|i| at(&verts, i)), band);
+            raster::paint_groups(tris.len(), extent, emit, (w, h, c), opts, finish).0
         }
     }
 }

@@ -122,6 +122,31 @@ impl Boundary {
         Boundary { segments }
     }
 
+    /// Whether every point of `qs` (source pixels) is inside the hull, farther than rounding
+    /// from its boundary (never for a degenerate hull: one point or a polyline).
+    pub(crate) fn contains(&self, qs: &[[f64; 2]]) -> bool {
+        let n = self.segments.len();
+        if n < 3 {
+            return false;
+        }
+        // The mean of the hull's vertices (each is the end of two edges) is strictly inside.
+        let mut g = [0.0; 2];
+        for s in &self.segments {
+            g[0] += s.a[0] + 0.5 * s.d[0];
+            g[1] += s.a[1] + 0.5 * s.d[1];
+        }
+        let g = g.map(|v| v / n as f64);
+        let cross = |s: &Segment, q: [f64; 2]| s.d[0] * (q[1] - s.a[1]) - s.d[1] * (q[0] - s.a[0]);
+        self.segments.iter().all(|s| {
+            let inner = cross(s, g);
+            qs.iter().all(|&q| {
+                let size = 1.0 + s.a[0].abs().max(s.a[1].abs()) + q[0].abs().max(q[1].abs());
+                let margin = 1e-9 * size * s.d[0].hypot(s.d[1]);
+                cross(s, q) * inner.signum() > margin && inner.abs() > margin
+            })
+        })
+    }
+
     /// Whether there is no sample at all.
     pub(crate) fn is_empty(&self) -> bool {
         self.segments.is_empty()

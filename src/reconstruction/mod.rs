@@ -613,10 +613,13 @@ fn store(px: &mut [u8], colour: [f32; 4]) {
 /// Paints the pixels of `band` that no triangle claimed, by the outside-the-hull rule.
 pub(crate) fn fill_unpainted(band: &mut Band<'_>, frame: &Frame<'_>, boundary: &Boundary) {
     let (w, c) = (band.width, band.channels);
+    let Some(painted) = band.painted.as_deref() else {
+        return; // The triangles cover the band.
+    };
     let mut hint = 0usize;
     for r in 0..band.rows {
         for i in 0..w {
-            if band.painted[r * w + i] {
+            if painted[r * w + i] {
                 continue;
             }
             let q = frame.source_point(i, band.row0 + r);

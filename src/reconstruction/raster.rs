@@ -1,22 +1,29 @@
 //! Scan conversion of colour triangles, with an exact top-left-style fill rule.
 //!
-//! The rasteriser works on plain [`RasterTriangle`]s (positions in output pixels, colours as
-//! `f32` per channel), not on `spade` faces, so that any planar subdivision can be drawn: a
+//! The rasteriser works on plain [`RasterVertex`] triples (positions in output pixels, colours
+//! as `f32` per channel), not on `spade` faces, so that any planar subdivision can be drawn: a
 //! Delaunay cell with k ≥ 4 cocircular vertices can be given as k triangles around a synthetic
 //! centre vertex.
 //!
 //! # Fill rule
 //!
 //! Pixel `(i, j)` is sampled at its centre `(i + 0.5, j + 0.5)`. A centre belongs to a triangle
-//! when it is on the inner side of its three edges. Each edge's side test is evaluated in one
-//! canonical way (from the lexicographically smaller end point), so two triangles sharing an
-//! edge see bitwise opposite values and never both claim a centre, nor both miss it. A centre
-//! exactly on an edge (or vertex) is decided as if it were moved by an infinitesimal
-//! `(ε, ε²)` to the right and down, which gives every such point to exactly one triangle of
-//! a conforming mesh (the usual top-left rule, in symbolic-perturbation form).
+//! when it is inside; a centre exactly on an edge or a vertex is decided as if it were moved by
+//! an infinitesimal `(ε, ε²)` to the right and down, which gives every such point to exactly one
+//! triangle of a conforming mesh (the usual top-left rule, in symbolic-perturbation form).
 //!
-//! Spans are found per row from the edge lines in floating point and the exact side test is
-//! only evaluated for the (rare) pixel centres within rounding distance of an edge.
+//! In scanline form: row `j` belongs to a triangle when `top ≤ j + 0.5 < bottom` (its vertices'
+//! y extent), and on that row every edge crossing it gives one number, the first pixel whose
+//! centre is at or right of the edge, `⌈x − 0.5⌉` for the crossing `x`. A triangle's span is
+//! `[first of its left edge, first of its right edge)`. Two triangles sharing an edge read the
+//! same number from it, so they neither overlap nor leave a gap, by construction.
+//!
+//! The numbers are exact: the crossing is computed in `f64` with a bound on its rounding error,
+//! and only when a pixel centre is within that bound of the edge is the side decided by an
+//! exact orientation predicate (`robust::orient2d`) on the original `f64` coordinates. So there
+//! is no snapping, no limited coordinate range, and the partition holds for any finite input.
+
+use robust::{orient2d, Coord};
 
 /// One corner of a [`RasterTriangle`]: a position in output pixel coordinates and a colour
 /// (`f32` per channel; only the first `channels` entries are used).
@@ -31,314 +38,365 @@ pub struct RasterVertex {
 /// A triangle to rasterise, vertices in any order (either orientation).
 pub type RasterTriangle = [RasterVertex; 3];
 
-#[derive(Clone, Copy, Debug)]
-enum Side {
-    /// Bounds the span on the left (inside for x ≥ line).
-    Left,
-    /// Bounds the span on the right (inside for x ≤ line).
-    Right,
-    /// Horizontal: decides whole rows.
-    Row,
+/// `max(a, b)`, `b` if either is NaN: one `maxsd` (`f64::max` also orders NaN, at a cost).
+#[inline(always)]
+pub(crate) fn fmax(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
 }
 
+/// `min(a, b)`, `b` if either is NaN.
+#[inline(always)]
+pub(crate) fn fmin(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// 1.5·2^52: adding it to an `f64` of magnitude below 2^51 rounds it to an integer, which
+/// its bits then hold (minus those of `MAGIC`), with no float → int conversion.
+const MAGIC: f64 = 6_755_399_441_055_744.0;
+
+/// `u` rounded to the nearest integer (ties to even), for `|u| < 2^51`.
+#[inline(always)]
+fn round_i64(u: f64) -> i64 {
+    ((u + MAGIC).to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64)
+}
+
+/// `⌊u⌋` for `|u| < 2^51`.
+#[inline(always)]
+fn floor_i64(u: f64) -> i64 {
+    let (c, d) = ceil_frac(u);
+    c - (d > 0.0) as i64
+}
+
+/// `⌈u⌉` for `|u| < 2^51`, and `⌈u⌉ − u`.
+#[inline(always)]
+fn ceil_frac(u: f64) -> (i64, f64) {
+    let r = (u + MAGIC) - MAGIC;
+    let n = round_i64(u);
+    let d = r - u;
+    if d < 0.0 {
+        (n + 1, d + 1.0)
+    } else {
+        (n, d)
+    }
+}
+
+/// The first row `k` in `lo..=hi` (`0 ≤ lo ≤ hi < 2^51`) whose centre line `k + 0.5` is at
+/// or below `y` (`hi` if none): `⌈y − 0.5⌉` clamped, exact because `y − 0.5` is exact in
+/// `f64` for `0.25 ≤ y < 2^52`, and either side of that range the clamp decides.
+#[inline(always)]
+fn first_row(y: f64, lo: i64, hi: i64) -> i64 {
+    ceil_frac(fmin(fmax(y - 0.5, lo as f64), hi as f64)).0
+}
+
+/// A non-horizontal edge from its upper end `a` to its lower end `b`, as a function of the row.
 #[derive(Clone, Copy, Debug)]
 struct Edge {
-    // Canonical end points: (ax, ay) ≤ (bx, by) lexicographically.
-    ax: f64,
-    ay: f64,
-    bx: f64,
-    by: f64,
-    /// The triangle's inside is where the canonical edge function is negative.
-    flip: bool,
-    /// Inside when the edge function is exactly zero (symbolic perturbation).
-    tie: bool,
-    /// dx / dy along the line.
+    a: [f64; 2],
+    b: [f64; 2],
+    /// `a.x − 0.5`.
+    ah: f64,
+    /// dx / dy.
     slope: f64,
-    /// The part of the crossing's rounding bound that does not depend on the row.
-    m0: f64,
-    side: Side,
+    /// Bound on the rounding error of the crossing computed by [`Edge::first`], and 1 − it.
+    margin: f64,
+    margin1: f64,
+    /// Whether both ends are within the picture's centres (`0.5 ≤ x ≤ w − 0.5`).
+    inner: bool,
 }
 
 impl Edge {
-    fn new(a: [f64; 2], b: [f64; 2]) -> Edge {
-        // Directed a → b with the triangle on its inner (E ≥ 0) side.
-        let tie = if a[1] != b[1] {
-            a[1] > b[1]
+    #[inline]
+    fn new(a: [f64; 2], b: [f64; 2], w: i64) -> Edge {
+        let slope = (b[0] - a[0]) / (b[1] - a[1]);
+        // For a row between a and b, |t| ≤ |bx − ax| and the operations of `first` add up to
+        // less than 10·2^-53·(|ax| + |bx| + 1); the margin is three times that. An edge too
+        // steep for its slope to be a float is decided exactly everywhere.
+        let margin = if slope.is_finite() {
+            16.0 * f64::EPSILON * (1.0 + a[0].abs() + b[0].abs())
         } else {
-            b[0] > a[0]
+            f64::INFINITY
         };
-        let side = if b[1] > a[1] {
-            Side::Right
-        } else if b[1] < a[1] {
-            Side::Left
-        } else {
-            Side::Row
-        };
-        let (c, d, flip) = if (a[0], a[1]) <= (b[0], b[1]) {
-            (a, b, false)
-        } else {
-            (b, a, true)
-        };
-        let dy = d[1] - c[1];
-        let slope = if dy != 0.0 { (d[0] - c[0]) / dy } else { 0.0 };
         Edge {
-            ax: c[0],
-            ay: c[1],
-            bx: d[0],
-            by: d[1],
-            flip,
-            tie,
+            a,
+            b,
+            ah: a[0] - 0.5,
             slope,
-            m0: 64.0 * f64::EPSILON * (1.0 + c[0].abs() + d[0].abs()),
-            side,
+            margin,
+            margin1: 1.0 - margin,
+            inner: fmin(a[0], b[0]) >= 0.5 && fmax(a[0], b[0]) <= w as f64 - 0.5,
         }
     }
 
-    /// The exact (canonical) side test at `(px, py)`.
+    /// Whether the centre of pixel `i` on the row through `yc` is strictly left of the edge
+    /// (exact).
     #[inline]
-    fn inside(&self, px: f64, py: f64) -> bool {
-        let v = (self.bx - self.ax) * (py - self.ay) - (self.by - self.ay) * (px - self.ax);
-        let v = if self.flip { -v } else { v };
-        v > 0.0 || (v == 0.0 && self.tie)
+    fn left_of(&self, i: i64, yc: f64) -> bool {
+        let c = |p: [f64; 2]| Coord { x: p[0], y: p[1] };
+        // Counter-clockwise in y-up terms, i.e. left of a → b with y down.
+        orient2d(
+            c(self.a),
+            c(self.b),
+            Coord {
+                x: i as f64 + 0.5,
+                y: yc,
+            },
+        ) > 0.0
     }
 
-    /// Where the line crosses the row `py`, and a bound on the rounding error in pixels.
+    /// The first pixel `i` of the row through `yc` (`a.y ≤ yc ≤ b.y`) whose centre is at or right
+    /// of the edge, `⌈x − 0.5⌉` for the crossing `x`, clamped to `0..=w`.
     #[inline]
-    fn crossing(&self, py: f64) -> (f64, f64) {
-        let t = (py - self.ay) * self.slope;
-        let x = self.ax + t;
-        let m = self.m0 + 64.0 * f64::EPSILON * (x.abs() + t.abs());
-        (x, m)
+    fn first(&self, yc: f64, w: i64) -> i64 {
+        let u = self.ah + (yc - self.a[1]) * self.slope;
+        if self.inner {
+            // u is within 0..=w − 1 (but for rounding, which `first_exact` sees to).
+            let (i, d) = ceil_frac(u);
+            if d >= self.margin && d <= self.margin1 {
+                return i;
+            }
+            return self.first_exact(yc, u, i, w);
+        }
+        // Left of the picture (u < 0) the answer is 0; `first_exact` sees to u < −1 + margin.
+        let c = fmin(fmax(u, 0.0), 1e15);
+        let (i, d) = ceil_frac(c);
+        let d = d + (c - u);
+        if d >= self.margin && d <= self.margin1 {
+            // No integer within rounding distance of u: ⌈u⌉ is exact.
+            return i.min(w);
+        }
+        self.first_exact(yc, u, i, w)
+    }
+
+    /// [`Edge::first`] when `u` (estimate `i`) may be on the wrong side of an integer.
+    #[cold]
+    #[inline(never)]
+    fn first_exact(&self, yc: f64, u: f64, i: i64, w: i64) -> i64 {
+        // The exact crossing is within the margin of u.
+        if u + self.margin <= 0.0 {
+            return 0;
+        }
+        if u - self.margin > (w - 1) as f64 {
+            return w;
+        }
+        let mut i = i.clamp(0, w);
+        while i > 0 && !self.left_of(i - 1, yc) {
+            i -= 1;
+        }
+        while i < w && self.left_of(i, yc) {
+            i += 1;
+        }
+        i
     }
 }
 
-/// `⌈u⌉`, clamped to ±10^15 (NaN → 0), without a libm call (baseline
-/// x86-64 has no rounding instruction).
-#[inline]
-fn ceil_i64(u: f64) -> i64 {
-    let u = u.clamp(-1e15, 1e15);
-    let t = u as i64;
-    if (t as f64) < u {
-        t + 1
-    } else {
-        t
+/// Calls `span(j, i0, i1)` for every row `j` in `lo..hi` that holds centres inside the
+/// triangle `p`, with the pixels `i0..i1` (within `0..w`, non-empty) whose centres are inside.
+#[inline(always)]
+fn scan(p: [[f64; 2]; 3], (lo, hi): (i64, i64), w: i64, mut span: impl FnMut(i64, i64, i64)) {
+    // Sort by y: top, mid, bottom.
+    let [mut t, mut m, mut b] = p;
+    if m[1] < t[1] {
+        std::mem::swap(&mut t, &mut m);
+    }
+    if b[1] < m[1] {
+        std::mem::swap(&mut m, &mut b);
+        if m[1] < t[1] {
+            std::mem::swap(&mut t, &mut m);
+        }
+    }
+    // Rows (NaN never compares, so a non-finite triangle has none).
+    let r0 = first_row(t[1], lo, hi);
+    let r1 = first_row(b[1], lo, hi);
+    if r0 >= r1 {
+        return;
+    }
+    // Columns: a centre at the rightmost x is never inside (right edges exclude it).
+    let xmin = fmin(fmin(t[0], m[0]), b[0]);
+    let xmax = fmax(fmax(t[0], m[0]), b[0]);
+    if !(xmax > 0.5 && xmin <= w as f64 - 0.5) {
+        return;
+    }
+    let c = |p: [f64; 2]| Coord { x: p[0], y: p[1] };
+    let o = orient2d(c(t), c(b), c(m));
+    if o == 0.0 || !o.is_finite() {
+        return; // Degenerate (no inside), or not finite.
+    }
+    // The long edge t → b is on the left when m is right of it (clockwise with y down).
+    let long_left = o < 0.0;
+    let long = Edge::new(t, b, w);
+    let rm = first_row(m[1], r0, r1);
+    let mut run = |e: Edge, rows: std::ops::Range<i64>| {
+        let (l, r) = if long_left { (&long, &e) } else { (&e, &long) };
+        for j in rows {
+            let yc = j as f64 + 0.5;
+            let (i0, i1) = (l.first(yc, w), r.first(yc, w));
+            if i0 < i1 {
+                span(j, i0, i1);
+            }
+        }
+    };
+    if r0 < rm {
+        run(Edge::new(t, m, w), r0..rm);
+    }
+    if rm < r1 {
+        run(Edge::new(m, b, w), rm..r1);
     }
 }
 
-/// `⌊u⌋`, clamped to ±10^15 (NaN → 0).
-#[inline]
-fn floor_i64(u: f64) -> i64 {
-    let u = u.clamp(-1e15, 1e15);
-    let t = u as i64;
-    if (t as f64) > u {
-        t - 1
-    } else {
-        t
-    }
-}
+/// Fraction bits of the fixed-point colours of [`Plane`].
+const FRAC: u32 = 32;
 
-/// A triangle prepared for scanning: edges, row range, colour plane.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Setup {
-    edges: [Edge; 3],
-    /// First and last row (inclusive) whose centres can be inside.
-    pub(crate) rows: (i64, i64),
+/// A triangle's colour plane: the colour at `(x0, y0)` and its gradient, in `f64`, and the
+/// same plane in fixed point over pixel indices when it is tame enough (see [`Plane::new`]).
+struct Plane<const C: usize> {
     x0: f64,
     y0: f64,
-    c0: [f64; 4],
-    gx: [f64; 4],
-    gy: [f64; 4],
+    c0: [f64; C],
+    gx: [f64; C],
+    gy: [f64; C],
+    /// The plane in fixed point; `None` for the `f64` path.
+    fixed: Option<Fixed<C>>,
 }
 
-impl Setup {
-    /// Prepares `t`; `None` for degenerate (zero-area or non-finite) triangles and for those
-    /// whose bounding box holds no pixel centre.
-    pub(crate) fn new(t: &RasterTriangle) -> Option<Setup> {
-        let [p0, mut p1, mut p2] = [t[0], t[1], t[2]];
-        let area = |p1: &RasterVertex, p2: &RasterVertex| {
-            (p1.pos[0] - p0.pos[0]) * (p2.pos[1] - p0.pos[1])
-                - (p1.pos[1] - p0.pos[1]) * (p2.pos[0] - p0.pos[0])
-        };
-        let mut det = area(&p1, &p2);
-        if !det.is_finite() || det == 0.0 {
-            return None;
-        }
-        if det < 0.0 {
-            std::mem::swap(&mut p1, &mut p2);
-            det = -det;
-        }
-        let ymin = p0.pos[1].min(p1.pos[1]).min(p2.pos[1]);
-        let ymax = p0.pos[1].max(p1.pos[1]).max(p2.pos[1]);
-        // Row j is sampled at j + 0.5. Rows whose centre line is farther than a rounding margin
-        // outside [ymin, ymax] cannot hold an inside centre; the margin (far larger than any
-        // rounding of the side tests) keeps apex rows that rounding could decide either way.
-        let my = 1e-7 * (1.0 + ymin.abs().max(ymax.abs()));
-        let rows = (ceil_i64(ymin - 0.5 - my), floor_i64(ymax - 0.5 + my));
-        if rows.0 > rows.1 {
-            return None;
-        }
-        // Likewise columns: most triangles of a downscaled render hold no pixel centre at all
-        // and are dropped here, before their edges and colour plane are set up.
-        let xmin = p0.pos[0].min(p1.pos[0]).min(p2.pos[0]);
-        let xmax = p0.pos[0].max(p1.pos[0]).max(p2.pos[0]);
-        let mx = 1e-7 * (1.0 + xmin.abs().max(xmax.abs()));
-        if ceil_i64(xmin - 0.5 - mx) > floor_i64(xmax - 0.5 + mx) {
-            return None;
-        }
-        let edges = [
-            Edge::new(p0.pos, p1.pos),
-            Edge::new(p1.pos, p2.pos),
-            Edge::new(p2.pos, p0.pos),
-        ];
-        let (d1x, d1y) = (p1.pos[0] - p0.pos[0], p1.pos[1] - p0.pos[1]);
-        let (d2x, d2y) = (p2.pos[0] - p0.pos[0], p2.pos[1] - p0.pos[1]);
-        let mut c0 = [0.0; 4];
-        let mut gx = [0.0; 4];
-        let mut gy = [0.0; 4];
-        let inv = 1.0 / det;
-        for k in 0..4 {
-            let a = p0.colour[k] as f64;
-            let e1 = p1.colour[k] as f64 - a;
-            let e2 = p2.colour[k] as f64 - a;
+/// Anchor pixel `(ia, ja)`, then the colour + ½ there and the steps per pixel in x and y,
+/// each scaled by 2^FRAC.
+type Fixed<const C: usize> = ((i64, i64), [[i64; C]; 3]);
+
+impl<const C: usize> Plane<C> {
+    #[inline(always)]
+    fn new(v: [&RasterVertex; 3]) -> Self {
+        let [p0, p1, p2] = v.map(|v| v.pos);
+        let (d1x, d1y) = (p1[0] - p0[0], p1[1] - p0[1]);
+        let (d2x, d2y) = (p2[0] - p0[0], p2[1] - p0[1]);
+        let inv = 1.0 / (d1x * d2y - d1y * d2x);
+        // A triangle too thin for its area to be a float is drawn in its first colour.
+        let inv = if inv.is_finite() { inv } else { 0.0 };
+        let mut c0 = [0.0; C];
+        let mut gx = [0.0; C];
+        let mut gy = [0.0; C];
+        for k in 0..C {
+            let a = v[0].colour[k] as f64;
+            let e1 = v[1].colour[k] as f64 - a;
+            let e2 = v[2].colour[k] as f64 - a;
             c0[k] = a;
             gx[k] = (e1 * d2y - e2 * d1y) * inv;
             gy[k] = (e2 * d1x - e1 * d2x) * inv;
         }
-        Some(Setup {
-            edges,
-            rows,
-            x0: p0.pos[0],
-            y0: p0.pos[1],
+        // Fixed point when every number fits with room to spare: vertex colours within
+        // 0..=255, gradients below 2^8 per pixel and the triangle under 2^20 pixels across, so
+        // that products stay below 2^61 and the rounding of the steps (2^-33 each) adds up to
+        // less than 2^-12 across the triangle. Every centre a triangle paints is inside it
+        // (the fill rule is exact), where the plane is between its vertex colours: the
+        // fixed-point colour + ½ is then within [2^-2, 256 − 2^-2), its integer part a byte.
+        let ext = fmax(fmax(d1x.abs(), d2x.abs()), fmax(d1y.abs(), d2y.abs()));
+        let mut tame = ext < (1 << 20) as f64 && p0[0].abs() < 1e15 && p0[1].abs() < 1e15;
+        for v in v {
+            for &c in &v.colour[..C] {
+                tame &= (0.0..=255.0).contains(&c);
+            }
+        }
+        let (ia, ja) = if tame {
+            (floor_i64(p0[0]), floor_i64(p0[1]))
+        } else {
+            (0, 0)
+        };
+        let one = (1u64 << FRAC) as f64;
+        let mut f = [[0i64; C]; 3];
+        let (dx, dy) = (ia as f64 + 0.5 - p0[0], ja as f64 + 0.5 - p0[1]);
+        for k in 0..C {
+            let at = c0[k] + gx[k] * dx + gy[k] * dy + 0.5;
+            tame &= at.abs() < 1024.0 && gx[k].abs() < 256.0 && gy[k].abs() < 256.0;
+            f[0][k] = round_i64(at * one);
+            f[1][k] = round_i64(gx[k] * one);
+            f[2][k] = round_i64(gy[k] * one);
+        }
+        Plane {
+            x0: p0[0],
+            y0: p0[1],
             c0,
             gx,
             gy,
-        })
-    }
-
-    /// The pixels `[i0, i1)` of row `j` (image `width` wide) whose centres are inside.
-    #[inline]
-    pub(crate) fn span(&self, j: i64, width: i64) -> (i64, i64) {
-        let py = j as f64 + 0.5;
-        let mut lo = 0i64;
-        let mut hi = width;
-        for e in &self.edges {
-            match e.side {
-                Side::Row => {
-                    if !e.inside(0.0, py) {
-                        return (0, 0);
-                    }
-                }
-                Side::Left => {
-                    // First index whose centre is at or right of the line.
-                    let (x, m) = e.crossing(py);
-                    let mut t = ceil_i64((x - 0.5).clamp(-1.0, width as f64 + 1.0));
-                    if t >= 0 && t <= width {
-                        let c = t as f64 + 0.5;
-                        if c - x < m || x - (c - 1.0) < m {
-                            while t > 0 && e.inside((t - 1) as f64 + 0.5, py) {
-                                t -= 1;
-                            }
-                            while t < width && !e.inside(t as f64 + 0.5, py) {
-                                t += 1;
-                            }
-                        }
-                    }
-                    lo = lo.max(t);
-                }
-                Side::Right => {
-                    // One past the last index whose centre is at or left of the line.
-                    let (x, m) = e.crossing(py);
-                    let mut t =
-                        (floor_i64((x - 0.5).clamp(-2.0, width as f64 + 1.0)) + 1).min(width + 1);
-                    if t >= 0 && t <= width {
-                        let c = t as f64 + 0.5;
-                        if c - x < m || x - (c - 1.0) < m {
-                            while t < width && e.inside(t as f64 + 0.5, py) {
-                                t += 1;
-                            }
-                            while t > 0 && !e.inside((t - 1) as f64 + 0.5, py) {
-                                t -= 1;
-                            }
-                        }
-                    }
-                    hi = hi.min(t);
-                }
-            }
-            if lo >= hi {
-                return (0, 0);
-            }
+            fixed: tame.then_some(((ia, ja), f)),
         }
-        (lo, hi)
     }
 
-    /// Colour (first `C` channels) at pixel centre `(i + 0.5, j + 0.5)` and its step along x.
-    #[inline]
-    fn start<const C: usize>(&self, i: i64, j: i64) -> ([f32; C], [f32; C]) {
-        let dx = i as f64 + 0.5 - self.x0;
+    /// Paints `px`, the pixels `i0..` of row `j` (`C` channels each): each channel of the
+    /// plane at the pixel centre, rounded half up and clamped to 0..=255.
+    #[inline(always)]
+    fn fill(&self, px: &mut [u8], i0: i64, j: i64) {
+        if let Some(((ia, ja), [k0, kx, ky])) = &self.fixed {
+            // The integer part of the fixed-point colour (+ ½) is the byte (see `new`).
+            let (di, dj) = (i0 - ia, j - ja);
+            let mut v = [0i64; C];
+            for k in 0..C {
+                v[k] = k0[k] + kx[k] * di + ky[k] * dj;
+            }
+            for p in px.chunks_exact_mut(C) {
+                for k in 0..C {
+                    p[k] = (v[k] >> FRAC) as u8;
+                    v[k] += kx[k];
+                }
+            }
+            return;
+        }
         let dy = j as f64 + 0.5 - self.y0;
-        let mut v = [0f32; C];
-        let mut g = [0f32; C];
-        for k in 0..C {
-            v[k] = (self.c0[k] + self.gx[k] * dx + self.gy[k] * dy) as f32;
-            g[k] = self.gx[k] as f32;
+        for (i, p) in (i0..).zip(px.chunks_exact_mut(C)) {
+            let dx = i as f64 + 0.5 - self.x0;
+            for k in 0..C {
+                // Saturating float → int cast: clamps to 0..=255.
+                p[k] = (self.c0[k] + self.gx[k] * dx + self.gy[k] * dy + 0.5) as u8;
+            }
         }
-        (v, g)
     }
 }
 
-/// A band of output rows being painted: `pixels` and `painted` hold rows `row0..row0 + rows`.
+/// A band of output rows being painted: `pixels` (and `painted`, when kept) hold rows
+/// `row0..row0 + rows`.
 pub(crate) struct Band<'a> {
     pub(crate) width: usize,
     pub(crate) row0: usize,
     pub(crate) rows: usize,
     pub(crate) channels: usize,
     pub(crate) pixels: &'a mut [u8],
-    pub(crate) painted: &'a mut [bool],
+    /// Which pixels a triangle claimed; `None` when the triangles are known to cover the band.
+    pub(crate) painted: Option<&'a mut [bool]>,
 }
 
-/// Rows of `s` that fall in the band, as a half-open range.
-#[inline]
-fn band_rows(s: &Setup, row0: usize, rows: usize) -> (i64, i64) {
-    let lo = s.rows.0.max(row0 as i64);
-    let hi = (s.rows.1 + 1).min((row0 + rows) as i64);
-    (lo, hi)
-}
-
-#[inline]
-fn paint_c<const C: usize>(s: &Setup, band: &mut Band<'_>) {
+#[inline(always)]
+fn paint_c<const C: usize>(v: [&RasterVertex; 3], band: &mut Band<'_>) {
     let w = band.width;
-    let (r0, r1) = band_rows(s, band.row0, band.rows);
-    for j in r0..r1 {
-        let (i0, i1) = s.span(j, w as i64);
-        if i0 >= i1 {
-            continue;
+    let rows = (band.row0 as i64, (band.row0 + band.rows) as i64);
+    let mut plane = None;
+    let pixels = &mut *band.pixels;
+    let mut painted = band.painted.as_deref_mut();
+    let row0 = band.row0;
+    scan(v.map(|v| v.pos), rows, w as i64, |j, i0, i1| {
+        let plane = plane.get_or_insert_with(|| Plane::<C>::new(v));
+        let base = (j as usize - row0) * w;
+        let (o0, o1) = (base + i0 as usize, base + i1 as usize);
+        plane.fill(&mut pixels[o0 * C..o1 * C], i0, j);
+        if let Some(m) = painted.as_deref_mut() {
+            m[o0..o1].fill(true);
         }
-        let (mut v, g) = s.start::<C>(i0, j);
-        let row = j as usize - band.row0;
-        let base = row * w;
-        let px = &mut band.pixels[(base + i0 as usize) * C..(base + i1 as usize) * C];
-        for p in px.chunks_exact_mut(C) {
-            for k in 0..C {
-                // Saturating float → int cast: rounds half up and clamps to 0..=255.
-                p[k] = (v[k] + 0.5) as u8;
-                v[k] += g[k];
-            }
-        }
-        band.painted[base + i0 as usize..base + i1 as usize].fill(true);
-    }
+    });
 }
 
-/// Paints the pixels of `band` covered by triangle `t` and marks them painted.
+/// Paints the pixels of `band` covered by the triangle `v` (and marks them painted).
 #[inline]
-pub(crate) fn paint(t: &RasterTriangle, band: &mut Band<'_>) {
-    let Some(s) = Setup::new(t) else {
-        return;
-    };
+pub(crate) fn paint(v: [&RasterVertex; 3], band: &mut Band<'_>) {
     match band.channels {
-        1 => paint_c::<1>(&s, band),
-        2 => paint_c::<2>(&s, band),
-        3 => paint_c::<3>(&s, band),
-        _ => paint_c::<4>(&s, band),
+        1 => paint_c::<1>(v, band),
+        2 => paint_c::<2>(v, band),
+        3 => paint_c::<3>(v, band),
+        _ => paint_c::<4>(v, band),
     }
 }
 
@@ -348,37 +406,39 @@ const BAND: usize = 32;
 
 /// Paints a `width × height × channels` picture from groups of triangles (e.g. the fan of a
 /// Delaunay cell), band by band: each group is binned by the rows its vertices span
-/// (`y_extent`, output pixels), then each band draws the triangles `emit` gives for its
-/// groups, in group order, and `finish` paints what no triangle claimed. Bands run on the
-/// `rayon` pool when `parallel`; the picture is the same either way. Returns the pixels and
-/// the mask of pixels a triangle claimed.
+/// (`y_extent`, output pixels), then each band draws its groups in group order (`emit` paints
+/// a group into a band with [`paint`]), and `finish` paints what no triangle claimed. Bands
+/// run on the `rayon` pool when `parallel`; the picture is the same either way. Returns the
+/// pixels and, if `mask`, which pixels a triangle claimed (else the triangles are taken to
+/// cover the picture and nothing is tracked).
 pub(crate) fn paint_groups<E, Y, F>(
     groups: usize,
     y_extent: Y,
     emit: E,
     (width, height, channels): (usize, usize, usize),
-    parallel: bool,
+    (parallel, mask): (bool, bool),
     finish: F,
 ) -> (Vec<u8>, Vec<bool>)
 where
     Y: Fn(usize) -> (f64, f64),
-    E: Fn(usize, &mut dyn FnMut(&RasterTriangle)) + Sync,
+    E: Fn(usize, &mut Band<'_>) + Sync,
     F: Fn(&mut Band<'_>) + Sync,
 {
     let (w, h, c) = (width, height, channels);
     let mut out = vec![0u8; w * h * c];
-    let mut mask = vec![false; w * h];
+    let mut painted = vec![false; if mask { w * h } else { 0 }];
     if w == 0 || h == 0 {
-        return (out, mask);
+        return (out, painted);
     }
     let nbands = h.div_ceil(BAND);
-    // Counting sort of the groups into the bands they touch.
+    // Counting sort of the groups into the bands they touch (rows whose centre line is in
+    // [y0, y1), widened by a margin far beyond rounding).
     let span = |g: usize| {
         let (y0, y1) = y_extent(g);
-        let m = 1e-7 * (1.0 + y0.abs().max(y1.abs()));
-        let r0 = ceil_i64(y0 - 0.5 - m).max(0);
-        let r1 = floor_i64(y1 - 0.5 + m).min(h as i64 - 1);
-        (r0 <= r1).then_some((r0 as usize / BAND, r1.max(0) as usize / BAND))
+        let m = 1e-7 * (1.0 + fmax(y0.abs(), y1.abs()));
+        let row = |y: f64| ceil_frac(fmin(fmax(y, -1.0), h as f64)).0;
+        let (r0, r1) = (row(y0 - 0.5 - m), row(y1 - 0.5 + m).min(h as i64) - 1);
+        (r0 <= r1).then_some((r0.max(0) as usize / BAND, r1.max(0) as usize / BAND))
     };
     let spans: Vec<Option<(usize, usize)>> = (0..groups).map(span).collect();
     let mut start = vec![0u32; nbands + 1];
@@ -401,39 +461,43 @@ where
         }
     }
     drop(spans);
-    let run = |b: usize, chunk: &mut [u8], painted: &mut [bool]| {
+    let run = |b: usize, chunk: &mut [u8], painted: Option<&mut [bool]>| {
         let mut band = Band {
             width: w,
             row0: b * BAND,
-            rows: painted.len() / w,
+            rows: chunk.len() / (w * c),
             channels: c,
             pixels: chunk,
             painted,
         };
         for &g in &bins[start[b] as usize..start[b + 1] as usize] {
-            emit(g as usize, &mut |t| paint(t, &mut band));
+            emit(g as usize, &mut band);
         }
         finish(&mut band);
+    };
+    let masks: Vec<Option<&mut [bool]>> = if mask {
+        painted.chunks_mut(BAND * w).map(Some).collect()
+    } else {
+        (0..nbands).map(|_| None).collect()
     };
     if parallel {
         use rayon::prelude::*;
         out.par_chunks_mut(BAND * w * c)
-            .zip(mask.par_chunks_mut(BAND * w))
+            .zip(masks)
             .enumerate()
-            .for_each(|(b, (chunk, painted))| run(b, chunk, painted));
+            .for_each(|(b, (chunk, m))| run(b, chunk, m));
     } else {
-        let bands = out.chunks_mut(BAND * w * c).zip(mask.chunks_mut(BAND * w));
-        for (b, (chunk, painted)) in bands.enumerate() {
-            run(b, chunk, painted);
+        for (b, (chunk, m)) in out.chunks_mut(BAND * w * c).zip(masks).enumerate() {
+            run(b, chunk, m);
         }
     }
-    (out, mask)
+    (out, painted)
 }
 
 /// The y extent of a triangle.
 fn y_extent(t: &RasterTriangle) -> (f64, f64) {
-    let ys = t.map(|v| v.pos[1]);
-    (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]))
+    let [a, b, c] = t.map(|v| v.pos[1]);
+    (fmin(fmin(a, b), c), fmax(fmax(a, b), c))
 }
 
 /// How many triangles claim each pixel of a `width × height` output (row-major).
@@ -452,14 +516,13 @@ fn y_extent(t: &RasterTriangle) -> (f64, f64) {
 pub fn raster_coverage(triangles: &[RasterTriangle], width: u32, height: u32) -> Vec<u32> {
     let (w, h) = (width as usize, height as usize);
     let mut count = vec![0u32; w.saturating_mul(h)];
-    for s in triangles.iter().filter_map(Setup::new) {
-        let (r0, r1) = band_rows(&s, 0, h);
-        for j in r0..r1 {
-            let (i0, i1) = s.span(j, w as i64);
-            for i in i0..i1 {
-                count[j as usize * w + i as usize] += 1;
+    for t in triangles {
+        scan(t.map(|v| v.pos), (0, h as i64), w as i64, |j, i0, i1| {
+            let row = j as usize * w;
+            for n in &mut count[row + i0 as usize..row + i1 as usize] {
+                *n += 1;
             }
-        }
+        });
     }
     count
 }
@@ -486,9 +549,12 @@ pub fn rasterise(
     paint_groups(
         triangles.len(),
         |k| y_extent(&triangles[k]),
-        |k, f| f(&triangles[k]),
+        |k, band| {
+            let [a, b, c] = &triangles[k];
+            paint([a, b, c], band)
+        },
         (width as usize, height as usize, c),
-        false,
+        (false, true),
         |_| {},
     )
 }
