@@ -5,7 +5,7 @@
 //!     [--colour progressive|area|nearest|bilinear] IMAGE...
 //! ```
 //!
-//! Defaults: predictive coding at quality 50, density 1/4, first level 128 (the README's table).
+//! Defaults: predictive coding at quality 50, density 1/4, first level 127 (the README's table).
 //!
 //! For each image: the PSNR (dB, MSE pooled over R, G, B) of the full-size Gouraud render of the
 //! first B bytes of the qcs file, B = 32, 64, …, 8192 and the whole file; and the same for a
@@ -19,7 +19,7 @@ use qcs::sampling::SampleColour;
 use qcs::{DecodeOptions, EncodeOptions, Method};
 
 /// The quality of the README's rate–distortion table (the other settings are the encoder's
-/// defaults: density 1/4, first level 128).
+/// defaults: density 1/4, first level 127).
 const RD_QUALITY: u8 = 50;
 
 const BUDGETS: [usize; 9] = [32, 64, 128, 256, 512, 1024, 2048, 4096, 8192];

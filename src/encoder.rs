@@ -27,9 +27,9 @@ pub struct EncodeOptions {
     pub coding: Coding,
     /// What a sample's colour is.
     pub colour: SampleColour,
-    /// Samples in the first level (each later level doubles the count). Default 128: the first
-    /// level is one stretch of bytes with no chunk framing inside, which the smallest previews
-    /// need.
+    /// Samples in the first level (each later level doubles the count). Default 127, the
+    /// largest whose header field is one byte: the first level is then one stretch of about
+    /// a hundred bytes with no chunk framing inside, which the smallest previews need.
     pub first_level: u64,
     /// Lattice placement; `None` for the default frame of spec/sites.md.
     pub frame: Option<Frame>,
@@ -46,7 +46,7 @@ impl Default for EncodeOptions {
             density: 0.25,
             coding: crate::coding::predictive::Params::default().coding(),
             colour: SampleColour::default(),
-            first_level: 128,
+            first_level: 127,
             frame: None,
             icc: None,
             text: Vec::new(),

@@ -376,8 +376,13 @@ pub fn info(a: InfoArgs) -> Result<()> {
     println!("file: {} ({} bytes)", a.input.display(), ins.file_len);
     if let Some(h) = &ins.header {
         println!(
-            "version 1, {}×{} {:?}, {} samples, first level {}",
-            h.width, h.height, h.layout, h.total_samples, h.first_level
+            "version {}, {}×{} {:?}, {} samples, first level {}",
+            qcs::container::VERSION,
+            h.width,
+            h.height,
+            h.layout,
+            h.total_samples,
+            h.first_level
         );
         println!("coding: {:?}", h.coding);
         match h.lattice {
@@ -389,7 +394,10 @@ pub fn info(a: InfoArgs) -> Result<()> {
             ),
             None => println!("lattice: default (1 px per root, origin at (-W/2, -H/3))"),
         }
-        println!("header: {} bytes, CRC ok", ins.header_len.unwrap_or(0));
+        println!(
+            "header: {} bytes, check byte ok (level 0's CRC covers it too)",
+            ins.header_len.unwrap_or(0)
+        );
     }
     println!(
         "{:>5} {:>5} {:>10} {:>19} {:>9} {:>9}  status",
@@ -443,7 +451,7 @@ pub struct DemoArgs {
     pub input: PathBuf,
     /// Directory for the .qcs file and the previews.
     pub out_dir: PathBuf,
-    /// Total number of samples (default: one per 8 pixels).
+    /// Total number of samples (default: one per 4 pixels).
     #[arg(long)]
     pub samples: Option<u64>,
 }
@@ -453,10 +461,8 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
         .with_context(|| format!("cannot create {}", a.out_dir.display()))?;
     let img = image::open(&a.input)
         .with_context(|| format!("cannot read image {}", a.input.display()))?;
-    let params = qcs::coding::predictive::Params::from_quality(DEFAULT_QUALITY);
     let opts = EncodeOptions {
         samples: a.samples,
-        coding: params.coding(),
         ..Default::default()
     };
     let bytes = qcs::encode(&img, &opts)?;
