@@ -1,8 +1,10 @@
 //! Shepard interpolation: inverse squared distance weighting of the 4 nearest samples.
 //!
-//! The 4 nearest samples are found exactly with a uniform grid over the samples (the sites are
-//! Delone, so a grid of about four samples per cell keeps almost every query to a 3 × 3 block of cells,
-//! widened ring by ring only when the 4th distance cannot be proved final).
+//! The 4 nearest samples are found exactly. The output is rendered in blocks of pixels about
+//! 1.5 sample spacings wide: each block gathers once, from a uniform grid over the samples,
+//! every sample that can be among the 4 nearest of one of its pixel centres (within
+//! `D4(c) + 2r` of its centre `c`, `r` the half-diagonal), sorted by distance to `c`, and each
+//! pixel scans that list nearest first until no later candidate can come nearer than its 4th.
 
 use crate::sites::Point;
 
