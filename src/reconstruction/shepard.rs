@@ -1,13 +1,15 @@
 //! Shepard interpolation: inverse squared distance weighting of the 4 nearest samples.
 //!
-//! The 4 nearest samples are found exactly with a uniform grid over the samples (the sites are
-//! Delone, so a grid of about four samples per cell keeps almost every query to a 3 × 3 block of cells,
-//! widened ring by ring only when the 4th distance cannot be proved final).
+//! The 4 nearest samples are found exactly. The output is rendered in blocks of pixels about
+//! 1.5 sample spacings wide: each block gathers once, from a uniform grid over the samples,
+//! every sample that can be among the 4 nearest of one of its pixel centres (within
+//! `D4(c) + 2r` of its centre `c`, `r` the half-diagonal), sorted by distance to `c`, and each
+//! pixel scans that list nearest first until no later candidate can come nearer than its 4th.
 
 use crate::sites::Point;
 
 /// Samples per grid cell (mean).
-const PER_CELL: f64 = 4.0;
+const PER_CELL: f64 = 2.0;
 
 /// A uniform bucket grid over sample positions (source pixels), cells in row-major order.
 #[derive(Clone, Debug)]
@@ -23,42 +25,6 @@ pub struct Grid {
     xs: Vec<f64>,
     ys: Vec<f64>,
     ids: Vec<u32>,
-}
-
-/// The `K` nearest samples of a query: squared distances and sample indices, nearest first.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Nearest<const K: usize> {
-    pub(crate) d2: [f64; K],
-    pub(crate) id: [u32; K],
-    pub(crate) len: usize,
-}
-
-impl<const K: usize> Nearest<K> {
-    fn new() -> Self {
-        Nearest {
-            d2: [f64::INFINITY; K],
-            id: [u32::MAX; K],
-            len: 0,
-        }
-    }
-
-    #[inline]
-    fn offer(&mut self, d: f64, id: u32) {
-        // Ties are broken by sample index, so the result does not depend on scan order.
-        let last = K - 1;
-        if d > self.d2[last] || (d == self.d2[last] && id >= self.id[last]) {
-            return;
-        }
-        let mut k = last;
-        while k > 0 && (d < self.d2[k - 1] || (d == self.d2[k - 1] && id < self.id[k - 1])) {
-            self.d2[k] = self.d2[k - 1];
-            self.id[k] = self.id[k - 1];
-            k -= 1;
-        }
-        self.d2[k] = d;
-        self.id[k] = id;
-        self.len = (self.len + 1).min(K);
-    }
 }
 
 impl Grid {
@@ -144,301 +110,402 @@ impl Grid {
         self.ids.is_empty()
     }
 
-    #[inline]
-    fn scan_run<const K: usize>(
-        &self,
-        cy: usize,
-        cx0: usize,
-        cx1: usize,
-        q: Point,
-        best: &mut Nearest<K>,
-    ) {
-        let a = self.start[cy * self.nx + cx0] as usize;
-        let b = self.start[cy * self.nx + cx1 + 1] as usize;
-        let xs = &self.xs[a..b];
-        let ys = &self.ys[a..b];
-        let ids = &self.ids[a..b];
-        for k in 0..xs.len() {
-            let dx = xs[k] - q[0];
-            let dy = ys[k] - q[1];
-            best.offer(dx * dx + dy * dy, ids[k]);
-        }
-    }
-
-    /// The `K` nearest samples of `q` (all of them if there are fewer than `K`).
-    pub(crate) fn nearest<const K: usize>(&self, q: Point) -> Nearest<K> {
-        let mut best = Nearest::<K>::new();
-        let n = self.ids.len();
-        if n == 0 {
-            return best;
-        }
-        let need = K.min(n);
-        let fx = ((q[0] - self.x0) * self.inv_cs).clamp(0.0, (self.nx - 1) as f64);
-        let fy = ((q[1] - self.y0) * self.inv_cs).clamp(0.0, (self.ny - 1) as f64);
-        let (cx, cy) = (fx as usize, fy as usize);
-        // q projected onto the grid's box: samples outside the scanned block are at least as
-        // far from q as from this point.
-        let px = q[0].clamp(self.x0, self.x0 + self.nx as f64 * self.cs);
-        let py = q[1].clamp(self.y0, self.y0 + self.ny as f64 * self.cs);
-        let mut r = 1usize;
-        let (mut lx, mut hx, mut ly, mut hy) = (cx, cx, cy, cy);
-        // Ring 0.
-        self.scan_run(cy, cx, cx, q, &mut best);
-        loop {
-            // Add ring r: block [cx-r, cx+r] × [cy-r, cy+r] clipped to the grid.
-            let nlx = cx.saturating_sub(r);
-            let nhx = (cx + r).min(self.nx - 1);
-            let nly = cy.saturating_sub(r);
-            let nhy = (cy + r).min(self.ny - 1);
-            for yy in nly..=nhy {
-                if yy < ly || yy > hy {
-                    self.scan_run(yy, nlx, nhx, q, &mut best);
-                } else {
-                    if nlx < lx {
-                        self.scan_run(yy, nlx, lx - 1, q, &mut best);
-                    }
-                    if nhx > hx {
-                        self.scan_run(yy, hx + 1, nhx, q, &mut best);
-                    }
-                }
-            }
-            (lx, hx, ly, hy) = (nlx, nhx, nly, nhy);
-            let whole = lx == 0 && ly == 0 && hx == self.nx - 1 && hy == self.ny - 1;
-            if whole {
-                break;
-            }
-            if best.len >= need {
-                // Distance from the projected point to the block sides that have cells beyond.
-                let mut bound = f64::INFINITY;
-                if lx > 0 {
-                    bound = bound.min(px - (self.x0 + lx as f64 * self.cs));
-                }
-                if hx < self.nx - 1 {
-                    bound = bound.min(self.x0 + (hx + 1) as f64 * self.cs - px);
-                }
-                if ly > 0 {
-                    bound = bound.min(py - (self.y0 + ly as f64 * self.cs));
-                }
-                if hy < self.ny - 1 {
-                    bound = bound.min(self.y0 + (hy + 1) as f64 * self.cs - py);
-                }
-                let bound = bound.max(0.0);
-                if best.d2[need - 1] < bound * bound {
-                    break;
-                }
-            }
-            r += 1;
-        }
-        best
+    /// Mean distance between samples (source pixels).
+    fn spacing(&self) -> f64 {
+        self.cs / PER_CELL.sqrt()
     }
 }
 
-/// Tile side bounds (source pixels) relative to the mean sample spacing: small tiles scan fewer
-/// candidates per point, large ones gather candidates for more points at once.
-const TILE_MIN: f64 = 0.35;
-const TILE_MAX: f64 = 1.0;
-/// Preferred tile side in query steps (about this many points per tile side).
-const TILE_STEPS: f64 = 8.0;
+/// Relative slack on every distance bound: far above the few ulps of rounding in the
+/// distances, squared distances and square roots the bounds compare, far below any gap that
+/// would make a bound useless.
+const SLACK: f64 = 1.0 + 1e-9;
 
-/// One tile's candidate samples: every sample that can be among the 4 nearest of a point of
-/// the tile, sorted by distance to the tile centre.
-#[derive(Clone, Debug, Default)]
-struct Tile {
-    /// Generation that filled it (the tile row it belongs to).
-    gen: u64,
-    cx: f64,
-    cy: f64,
-    /// `(distance to centre, x, y, id)`, nearest first.
-    cands: Vec<(f64, f64, f64, u32)>,
+/// The 4 nearest samples of a point among a block's candidates: squared distances and
+/// candidate numbers, nearest first (ties by smaller sample index); `len` < 4 only when there
+/// are fewer samples.
+#[derive(Clone, Copy, Debug)]
+struct Nearest {
+    d2: [f64; 4],
+    k: [usize; 4],
+    len: usize,
 }
 
-/// Exact 4-nearest queries for points visited row by row (as [`super::per_pixel`] does), sharing
-/// work between nearby points: the plane is cut into square tiles, and the candidates of the
-/// tile row being visited are gathered once from the [`Grid`].
-///
-/// The answer is exactly [`Grid::nearest`]'s (same distances, same index tie-break): a sample
-/// in the 4 nearest of a point `p` of a tile with centre `c` and half-diagonal `r` is within
-/// `D4(p) + r ≤ D4(c) + 2r` of `c`, and while scanning candidates by distance to `c`, one at
-/// `key` is at least `key − |p − c|` from `p`.
-pub(crate) struct Tiled<'a> {
-    grid: &'a Grid,
-    /// Tile side in source pixels; `None`: plain per-point queries (tiles would hold < 2 points).
-    side: Option<f64>,
-    row: i64,
-    gen: u64,
-    tiles: Vec<Tile>,
+/// Candidate samples of one block of output pixels: every sample that can be among the 4
+/// nearest of one of its pixel centres, nearest to the block centre first (structure of
+/// arrays, so the per-pixel scan reads only what it needs), with their colours.
+struct Cands<const C: usize> {
+    /// A lower bound of the distance to the block centre, ascending.
+    key: Vec<f64>,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    id: Vec<u32>,
+    colour: Vec<[f64; C]>,
+    /// Gathering scratch: squared distance bits (low `IDX_BITS` bits cleared) | index into
+    /// `slots`, and the grid slots found.
+    found: Vec<u64>,
+    slots: Vec<u32>,
 }
 
-impl<'a> Tiled<'a> {
-    /// Queries on `grid` at points spaced about `step` source pixels apart.
-    pub(crate) fn new(grid: &'a Grid, step: [f64; 2]) -> Self {
-        let spacing = grid.cs / PER_CELL.sqrt();
-        let st = step[0].max(step[1]);
-        let side = (TILE_STEPS * st).clamp(TILE_MIN * spacing, TILE_MAX * spacing);
-        let useful = grid.len() >= 4 && side.is_finite() && side >= 2.0 * st;
-        Tiled {
-            grid,
-            side: useful.then_some(side),
-            row: i64::MIN,
-            gen: 0,
-            tiles: Vec::new(),
+/// Low bits of a packed squared distance that hold an index (the distance loses them, a
+/// relative change below 2⁻³⁶, far inside [`SLACK`]).
+const IDX_BITS: u32 = 16;
+const IDX_MASK: u64 = (1 << IDX_BITS) - 1;
+
+impl<const C: usize> Cands<C> {
+    fn new() -> Self {
+        Cands {
+            key: Vec::new(),
+            x: Vec::new(),
+            y: Vec::new(),
+            id: Vec::new(),
+            colour: Vec::new(),
+            found: Vec::new(),
+            slots: Vec::new(),
         }
     }
 
-    /// The 4 nearest samples of `q`.
-    pub(crate) fn nearest(&mut self, q: Point) -> Nearest<4> {
-        let Some(side) = self.side else {
-            return self.grid.nearest::<4>(q);
-        };
-        let g = self.grid;
-        let (fx, fy) = ((q[0] - g.x0) / side, (q[1] - g.y0) / side);
-        // Far outside the samples' box, or non-finite: no sharing.
-        let lim = 1e9;
-        if !(fx.abs() < lim && fy.abs() < lim) {
-            return g.nearest::<4>(q);
-        }
-        // ⌊·⌋ without a libm call (|f| < 1e9).
-        let floor = |f: f64| {
-            let t = f as i64;
-            t - i64::from((t as f64) > f)
-        };
-        let (tx, ty) = (floor(fx), floor(fy));
-        if ty != self.row {
-            self.row = ty;
-            self.gen += 1;
-        }
-        let col = tx.rem_euclid(4096) as usize;
-        if self.tiles.len() <= col {
-            self.tiles.resize_with(col + 1, Tile::default);
-        }
-        let gen = self.gen;
-        let tile = &mut self.tiles[col];
-        let cx = g.x0 + (tx as f64 + 0.5) * side;
-        let cy = g.y0 + (ty as f64 + 0.5) * side;
-        if tile.gen != gen || tile.cx != cx || tile.cy != cy {
-            tile.gen = gen;
-            tile.cx = cx;
-            tile.cy = cy;
-            g.gather(cx, cy, side, &mut tile.cands);
-        }
-        let rp = ((q[0] - cx) * (q[0] - cx) + (q[1] - cy) * (q[1] - cy)).sqrt();
-        let mut best = Nearest::<4>::new();
-        for &(key, x, y, id) in &tile.cands {
-            if best.len >= 4 {
-                let lb = key - rp - 1e-9 * (1.0 + key);
-                if lb > 0.0 && lb * lb > best.d2[3] {
-                    break;
-                }
-            }
-            let dx = x - q[0];
-            let dy = y - q[1];
-            best.offer(dx * dx + dy * dy, id);
-        }
-        best
-    }
-}
-
-impl Grid {
-    /// Every sample that can be among the 4 nearest of a point of the square tile of side `side`
-    /// centred on `(cx, cy)`, as `(distance to centre, x, y, id)` sorted by distance.
-    fn gather(&self, cx: f64, cy: f64, side: f64, out: &mut Vec<(f64, f64, f64, u32)>) {
-        out.clear();
-        let c4 = self.nearest::<4>([cx, cy]);
-        let r = side * std::f64::consts::FRAC_1_SQRT_2;
-        let reach = (c4.d2[3].sqrt() + 2.0 * r) * (1.0 + 1e-9) + 1e-9;
+    /// Every sample within `reach` of `c` into `found` and `slots`, sorted.
+    fn collect(&mut self, g: &Grid, c: Point, reach: f64) {
         let cell = |v: f64, o: f64, n: usize| {
-            let f = ((v - o) * self.inv_cs).clamp(0.0, (n - 1) as f64);
+            let f = ((v - o) * g.inv_cs).clamp(0.0, (n - 1) as f64);
             f as usize
         };
         let (lx, hx) = (
-            cell(cx - reach, self.x0, self.nx),
-            cell(cx + reach, self.x0, self.nx),
+            cell(c[0] - reach, g.x0, g.nx),
+            cell(c[0] + reach, g.x0, g.nx),
         );
         let (ly, hy) = (
-            cell(cy - reach, self.y0, self.ny),
-            cell(cy + reach, self.y0, self.ny),
+            cell(c[1] - reach, g.y0, g.ny),
+            cell(c[1] + reach, g.y0, g.ny),
         );
         let reach2 = reach * reach;
+        let mut n = 0;
         for yy in ly..=hy {
-            let a = self.start[yy * self.nx + lx] as usize;
-            let b = self.start[yy * self.nx + hx + 1] as usize;
-            for k in a..b {
-                let (dx, dy) = (self.xs[k] - cx, self.ys[k] - cy);
+            let a = g.start[yy * g.nx + lx] as usize;
+            let b = g.start[yy * g.nx + hx + 1] as usize;
+            // Room for every sample of the run; the ones within reach are kept.
+            self.found.resize(n + b - a, 0);
+            self.slots.resize(n + b - a, 0);
+            let (xs, ys) = (&g.xs[a..b], &g.ys[a..b]);
+            for (k, (&x, &y)) in xs.iter().zip(ys).enumerate() {
+                let (dx, dy) = (x - c[0], y - c[1]);
                 let d2 = dx * dx + dy * dy;
-                if d2 <= reach2 {
-                    out.push((d2.sqrt(), self.xs[k], self.ys[k], self.ids[k]));
+                // d2 ≥ 0: its bits order like its value.
+                self.found[n] = (d2.to_bits() & !IDX_MASK) | (n as u64 & IDX_MASK);
+                self.slots[n] = (a + k) as u32;
+                n += usize::from(d2 <= reach2);
+            }
+        }
+        self.found.truncate(n);
+        self.slots.truncate(n);
+        if n > IDX_MASK as usize {
+            // Too many to pack an index: sort by (distance, slot) and renumber.
+            let mut pairs: Vec<(u64, u32)> = (self.found.iter().map(|e| e & !IDX_MASK))
+                .zip(self.slots.iter().copied())
+                .collect();
+            pairs.sort_unstable();
+            self.found = pairs.iter().map(|e| e.0).collect();
+            self.slots = pairs.iter().map(|e| e.1).collect();
+        } else {
+            sort(&mut self.found);
+        }
+    }
+
+    /// Gathers every sample that can be among the 4 nearest of a point within `r` of `c`,
+    /// sorted by distance to `c`. `d4` bounds the 4th nearest distance of `c` (unknown if 0).
+    ///
+    /// A sample `j` among the 4 nearest of `p` is no farther from `p` than the 4 nearest of `c`
+    /// are: `|p − j| ≤ D4(p) ≤ D4(c) + |p − c|`, so `|c − j| ≤ D4(c) + 2r`.
+    fn gather(&mut self, g: &Grid, colours: &[u8], c: Point, r: f64, d4: f64) {
+        // Blocks far apart bound each other poorly: then start from a few spacings and widen.
+        let guess = 2.0 * g.spacing();
+        let d4 = if d4 > 0.0 && d4 <= guess { d4 } else { guess };
+        let mut reach = (d4 + 2.0 * r) * SLACK;
+        if !(reach > 0.0 && reach.is_finite()) {
+            reach = 1.0;
+        }
+        let need = loop {
+            self.collect(g, c, reach);
+            if self.found.len() < 4 && self.found.len() < g.len() {
+                reach *= 2.0;
+                continue;
+            }
+            let Some(e) = self.found.get(3) else {
+                break f64::INFINITY;
+            };
+            let need = (f64::from_bits(e & !IDX_MASK).sqrt() + 2.0 * r) * SLACK;
+            if need <= reach {
+                break need;
+            }
+            reach = need;
+        };
+        let need2 = need * need;
+        let keep = self
+            .found
+            .partition_point(|e| f64::from_bits(e & !IDX_MASK) <= need2);
+        let packed = self.slots.len() <= IDX_MASK as usize;
+        self.key.resize(keep, 0.0);
+        self.x.resize(keep, 0.0);
+        self.y.resize(keep, 0.0);
+        self.id.resize(keep, 0);
+        self.colour.resize(keep, [0.0; C]);
+        let soa = (self.key.iter_mut().zip(&mut self.x).zip(&mut self.y))
+            .zip(self.id.iter_mut().zip(&mut self.colour));
+        for (n, (((key, x), y), (id, colour))) in soa.enumerate() {
+            let e = self.found[n];
+            let k = self.slots[if packed { (e & IDX_MASK) as usize } else { n }] as usize;
+            *key = f64::from_bits(e & !IDX_MASK).sqrt();
+            (*x, *y, *id) = (g.xs[k], g.ys[k], g.ids[k]);
+            let o = *id as usize * C;
+            // Missing colour bytes count as 0.
+            *colour = [0.0; C];
+            if let Some(s) = colours.get(o..o + C) {
+                for (c, &v) in colour.iter_mut().zip(s) {
+                    *c = f64::from(v);
                 }
             }
         }
-        out.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
     }
-}
 
-/// Shepard colour from the 4 nearest samples `nb` (first `channels` channels).
-#[inline]
-pub(crate) fn colour_from(nb: &Nearest<4>, colours: &[u8], channels: usize) -> [f32; 4] {
-    match channels {
-        1 => colour_c::<1>(nb, colours),
-        2 => colour_c::<2>(nb, colours),
-        3 => colour_c::<3>(nb, colours),
-        _ => colour_c::<4>(nb, colours),
-    }
-}
-
-#[inline]
-fn colour_c<const C: usize>(nb: &Nearest<4>, colours: &[u8]) -> [f32; 4] {
-    let mut out = [0f32; 4];
-    if nb.len == 0 {
-        return [128.0; 4];
-    }
-    let col = |id: u32| -> [u8; C] {
-        let o = id as usize * C;
-        match colours.get(o..o + C) {
-            Some(s) => {
-                let mut c = [0u8; C];
-                c.copy_from_slice(s);
-                c
+    /// The 4 nearest of `q` among the candidates, `q` being in the block they were gathered
+    /// for, whose centre is `c`.
+    #[inline]
+    fn nearest(&self, q: Point, c: Point) -> Nearest {
+        let m = self.id.len();
+        let (key, xs, ys, ids) = (&self.key[..m], &self.x[..m], &self.y[..m], &self.id[..m]);
+        let d2 = |k: usize| {
+            let dx = xs[k] - q[0];
+            let dy = ys[k] - q[1];
+            dx * dx + dy * dy
+        };
+        // (d2, candidate) pairs: nearer, or as near with a smaller sample index.
+        let before =
+            |a: (f64, usize), b: (f64, usize)| a.0 < b.0 || (a.0 == b.0 && ids[a.1] < ids[b.1]);
+        let insert = |b: &mut [(f64, usize); 4], e: (f64, usize)| {
+            let mut i = 3;
+            while i > 0 && before(e, b[i - 1]) {
+                b[i] = b[i - 1];
+                i -= 1;
             }
-            None => [0u8; C],
+            b[i] = e;
+        };
+        let mut b = [(f64::INFINITY, 0); 4];
+        let head = m.min(8);
+        if m >= 4 {
+            // The first eight at once; the first four sorted by a network, the next four
+            // inserted; then the rest while they can still be nearer.
+            let mut d = [0.0; 8];
+            if let (Some(x8), Some(y8)) = (xs.first_chunk::<8>(), ys.first_chunk::<8>()) {
+                for k in 0..8 {
+                    let (dx, dy) = (x8[k] - q[0], y8[k] - q[1]);
+                    d[k] = dx * dx + dy * dy;
+                }
+            } else {
+                for k in 0..head {
+                    d[k] = d2(k);
+                }
+            }
+            b = [(d[0], 0), (d[1], 1), (d[2], 2), (d[3], 3)];
+            for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+                if before(b[j], b[i]) {
+                    b.swap(i, j);
+                }
+            }
+            for k in 4..head {
+                if d[k] <= b[3].0 && before((d[k], k), b[3]) {
+                    insert(&mut b, (d[k], k));
+                }
+            }
+        } else {
+            for k in 0..m {
+                insert(&mut b, (d2(k), k));
+            }
         }
-    };
-    if nb.d2[0] == 0.0 {
-        for (k, v) in col(nb.id[0]).iter().enumerate() {
-            out[k] = *v as f32;
+        if m > head {
+            let rq = ((q[0] - c[0]) * (q[0] - c[0]) + (q[1] - c[1]) * (q[1] - c[1])).sqrt();
+            // A candidate at `key` from c is at least `key − rq` from q: once that exceeds
+            // the 4th distance, no later candidate can enter.
+            let mut limit = (b[3].0.sqrt() + rq) * SLACK;
+            for (k, &key) in key.iter().enumerate().skip(head) {
+                if key > limit {
+                    break;
+                }
+                let e = (d2(k), k);
+                if e.0 <= b[3].0 && before(e, b[3]) {
+                    insert(&mut b, e);
+                    limit = (b[3].0.sqrt() + rq) * SLACK;
+                }
+            }
         }
-        return out;
-    }
-    let mut acc = [0f64; C];
-    let mut wsum = 0f64;
-    for k in 0..nb.len.min(4) {
-        let w = 1.0 / nb.d2[k];
-        wsum += w;
-        let cc = col(nb.id[k]);
-        for c in 0..C {
-            acc[c] += w * cc[c] as f64;
+        Nearest {
+            d2: [b[0].0, b[1].0, b[2].0, b[3].0],
+            k: [b[0].1, b[1].1, b[2].1, b[3].1],
+            len: m.min(4),
         }
     }
-    let inv = 1.0 / wsum;
-    for c in 0..C {
-        out[c] = (acc[c] * inv) as f32;
+
+    /// The Shepard colour of a pixel from its 4 nearest candidates `nb`, rounded like every
+    /// method: `Σ wₖ cₖ / Σ wₖ` with `wₖ = 1 / d²ₖ` summed nearest first, or the colour of a
+    /// sample the pixel centre is on.
+    #[inline]
+    fn shade(&self, nb: &Nearest, px: &mut [u8; C]) {
+        let col = |k: usize| self.colour.get(k).copied().unwrap_or([0.0; C]);
+        let mut out = [0f32; C];
+        if nb.len == 0 {
+            out = [128.0; C];
+        } else if nb.d2[0] == 0.0 {
+            out = col(nb.k[0]).map(|v| v as f32);
+        } else if nb.len == 4 {
+            let w = [
+                1.0 / nb.d2[0],
+                1.0 / nb.d2[1],
+                1.0 / nb.d2[2],
+                1.0 / nb.d2[3],
+            ];
+            let inv = 1.0 / (((w[0] + w[1]) + w[2]) + w[3]);
+            let cs = [col(nb.k[0]), col(nb.k[1]), col(nb.k[2]), col(nb.k[3])];
+            for c in 0..C {
+                let acc = ((w[0] * cs[0][c] + w[1] * cs[1][c]) + w[2] * cs[2][c]) + w[3] * cs[3][c];
+                out[c] = (acc * inv) as f32;
+            }
+        } else {
+            let mut acc = [0f64; C];
+            let mut wsum = 0f64;
+            for k in 0..nb.len {
+                let w = 1.0 / nb.d2[k];
+                wsum += w;
+                let cc = col(nb.k[k]);
+                for c in 0..C {
+                    acc[c] += w * cc[c];
+                }
+            }
+            let inv = 1.0 / wsum;
+            for c in 0..C {
+                out[c] = (acc[c] * inv) as f32;
+            }
+        }
+        for (p, v) in px.iter_mut().zip(out) {
+            // Saturating cast: round half up, clamp to 0..=255 (NaN → 0), as `super::store`.
+            *p = (v + 0.5) as u8;
+        }
     }
-    out
+}
+
+/// Sorts a short list by insertion (long ones by the library).
+fn sort(v: &mut [u64]) {
+    if v.len() > 48 {
+        v.sort_unstable();
+        return;
+    }
+    for i in 1..v.len() {
+        let e = v[i];
+        let mut j = i;
+        while j > 0 && v[j - 1] > e {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = e;
+    }
+}
+
+/// Block side in sample spacings: larger blocks gather candidates for more pixels at once,
+/// smaller ones leave fewer candidates to scan per pixel.
+const BLOCK: f64 = 1.5;
+
+/// Output pixels per block side: blocks about `BLOCK` sample spacings wide.
+fn block_size(grid: &Grid, step: f64) -> usize {
+    let b = (BLOCK * grid.spacing() / step).round();
+    if b.is_finite() {
+        b.clamp(1.0, 32.0) as usize
+    } else {
+        1
+    }
 }
 
 /// Renders by Shepard interpolation over `grid` into `frame`'s output.
 pub(crate) fn render(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
-    let (colours, c) = (frame.colours, frame.channels);
-    super::per_pixel(
-        frame,
-        parallel,
-        || Tiled::new(grid, [frame.sx, frame.sy]),
-        |t, q| colour_from(&t.nearest(q), colours, c),
-    )
+    match frame.channels {
+        1 => render_c::<1>(grid, frame, parallel),
+        2 => render_c::<2>(grid, frame, parallel),
+        3 => render_c::<3>(grid, frame, parallel),
+        _ => render_c::<4>(grid, frame, parallel),
+    }
+}
+
+fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
+    let (w, h) = (frame.width, frame.height);
+    let mut out = vec![0u8; w * h * C];
+    let (bw, bh) = (block_size(grid, frame.sx), block_size(grid, frame.sy));
+    let run = |row0: usize, band: &mut [u8]| {
+        let mut cands = Cands::<C>::new();
+        let rows = band.len() / (w * C);
+        // 4th nearest distance of the first block centre of the row.
+        let mut d4_row = 0.0;
+        let mut row_centre: Option<Point> = None;
+        let mut last: Option<Point> = None;
+        for by in (0..rows).step_by(bh) {
+            let rh = bh.min(rows - by);
+            for bx in (0..w).step_by(bw) {
+                let rw = bw.min(w - bx);
+                let (j0, j1) = (row0 + by, row0 + by + rh - 1);
+                let (a, b) = (
+                    frame.source_point(bx, j0),
+                    frame.source_point(bx + rw - 1, j1),
+                );
+                let c = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+                let dist = |p: Point| {
+                    ((p[0] - c[0]) * (p[0] - c[0]) + (p[1] - c[1]) * (p[1] - c[1])).sqrt()
+                };
+                let r = [a, b, [a[0], b[1]], [b[0], a[1]]]
+                    .into_iter()
+                    .map(dist)
+                    .fold(0.0, f64::max)
+                    * SLACK;
+                // A bound of D4(c): the 4th nearest of c among the previous block's
+                // candidates, or (starting a row) the row above's D4 plus the distance, D4
+                // being 1-Lipschitz.
+                let bound = match (bx, last, row_centre) {
+                    (0, _, Some(p)) => (d4_row + dist(p)) * SLACK,
+                    (0, _, None) => 0.0,
+                    (_, Some(p), _) => cands.nearest(c, p).d2[3].sqrt() * SLACK,
+                    _ => 0.0,
+                };
+                cands.gather(grid, frame.colours, c, r, bound);
+                last = Some(c);
+                if bx == 0 {
+                    row_centre = Some(c);
+                    d4_row = cands.key.get(3).copied().unwrap_or(0.0);
+                }
+                for j in 0..rh {
+                    for i in 0..rw {
+                        let q = frame.source_point(bx + i, j0 + j);
+                        let nb = cands.nearest(q, c);
+                        let o = ((by + j) * w + bx + i) * C;
+                        if let Some(px) = band.get_mut(o..o + C) {
+                            cands.shade(&nb, px.try_into().expect("C bytes"));
+                        }
+                    }
+                }
+            }
+        }
+    };
+    if parallel {
+        use rayon::prelude::*;
+        let rows = super::band_rows(h).div_ceil(bh) * bh;
+        out.par_chunks_mut(rows * w * C)
+            .enumerate()
+            .for_each(|(k, band)| run(k * rows, band));
+    } else {
+        run(0, &mut out);
+    }
+    out
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use super::super::{render_with, Method, RenderOptions};
+    use crate::sites::{Point, Quasicrystal};
 
     fn rng(seed: u64) -> impl FnMut() -> f64 {
         let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
@@ -450,37 +517,109 @@ mod tests {
         }
     }
 
-    /// Tiled queries give exactly the per-point grid answer, at several query spacings,
-    /// including a lattice (many exact ties) and points outside the samples' box.
-    #[test]
-    fn tiled_equals_per_point() {
-        let mut r = rng(11);
-        let mut sets: Vec<Vec<Point>> = vec![];
-        sets.push((0..3000).map(|_| [r() * 200.0, r() * 100.0]).collect());
-        sets.push(
-            (0..40)
-                .flat_map(|j| (0..40).map(move |i| [i as f64 * 2.0 + 1.0, j as f64 * 2.0 + 1.0]))
-                .collect(),
-        );
-        sets.push((0..7).map(|_| [r() * 50.0, r() * 50.0]).collect());
-        for pts in &sets {
-            let grid = Grid::new(pts);
-            for step in [0.05, 0.25, 0.5, 1.0, 3.0] {
-                let mut t = Tiled::new(&grid, [step, step]);
-                let mut y = -5.0;
-                while y < 110.0 {
-                    let mut x = -7.0;
-                    while x < 210.0 {
-                        let a = t.nearest([x, y]);
-                        let b = grid.nearest::<4>([x, y]);
-                        assert_eq!(
-                            (a.d2, a.id, a.len),
-                            (b.d2, b.id, b.len),
-                            "({x}, {y}) step {step}"
-                        );
-                        x += step * 7.3;
+    /// Shepard by brute force: every sample's squared distance, sorted with ties by index,
+    /// the 4 first weighted as the renderer's rule says.
+    fn brute(src: (u32, u32), c: usize, pts: &[Point], cols: &[u8], w: u32, h: u32) -> Vec<u8> {
+        let sx = src.0.max(1) as f64 / w as f64;
+        let sy = src.1.max(1) as f64 / h as f64;
+        let mut out = Vec::new();
+        let mut d: Vec<(f64, usize)> = Vec::new();
+        for j in 0..h {
+            for i in 0..w {
+                let q = [(i as f64 + 0.5) * sx, (j as f64 + 0.5) * sy];
+                d.clear();
+                for (k, p) in pts.iter().enumerate() {
+                    let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+                    d.push((dx * dx + dy * dy, k));
+                }
+                let order =
+                    |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+                if d.len() > 5 {
+                    d.select_nth_unstable_by(4, order);
+                    d.truncate(5);
+                }
+                d.sort_by(order);
+                let col =
+                    |k: usize, ch: usize| f64::from(cols.get(k * c + ch).copied().unwrap_or(0));
+                let mut px = [0f32; 4];
+                if d[0].0 == 0.0 {
+                    for ch in 0..c {
+                        px[ch] = col(d[0].1, ch) as f32;
                     }
-                    y += step * 5.1;
+                } else {
+                    let (mut acc, mut ws) = ([0f64; 4], 0f64);
+                    for &(dd, k) in d.iter().take(4) {
+                        ws += 1.0 / dd;
+                        for ch in 0..c {
+                            acc[ch] += (1.0 / dd) * col(k, ch);
+                        }
+                    }
+                    for ch in 0..c {
+                        px[ch] = (acc[ch] * (1.0 / ws)) as f32;
+                    }
+                }
+                out.extend(px[..c].iter().map(|v| (v + 0.5) as u8));
+            }
+        }
+        out
+    }
+
+    /// Whole renders equal the brute-force ones byte for byte, single-threaded and in
+    /// parallel: random, quasicrystal and lattice sites (exact ties), duplicates, collinear and
+    /// clustered samples, 1–5 samples, samples outside the picture, odd output sizes, up- and
+    /// downscaled.
+    #[test]
+    fn renders_equal_brute_force() {
+        let mut r = rng(11);
+        let mut sets: Vec<((u32, u32), Vec<Point>)> = Vec::new();
+        for n in [1usize, 2, 3, 4, 5, 9, 40, 700] {
+            sets.push(((60, 45), (0..n).map(|_| [r() * 60.0, r() * 45.0]).collect()));
+        }
+        let qc = Quasicrystal::new(96, 64).expect("frame");
+        sets.push(((96, 64), qc.first(900).into_iter().map(|s| s.pos).collect()));
+        let mut lattice = Vec::new();
+        for j in 0..16 {
+            for i in 0..20 {
+                // On pixel centres at 2× and 0.5×; every 5th twice.
+                lattice.push([i as f64 * 2.0 + 0.25, j as f64 * 2.0 + 0.75]);
+                if (i + j) % 5 == 0 {
+                    lattice.push([i as f64 * 2.0 + 0.25, j as f64 * 2.0 + 0.75]);
+                }
+            }
+        }
+        sets.push(((40, 32), lattice));
+        sets.push(((40, 32), (0..30).map(|k| [k as f64 * 1.3, 11.0]).collect()));
+        sets.push((
+            (40, 32),
+            (0..30).map(|k| [k as f64 * 1.3, k as f64]).collect(),
+        ));
+        sets.push(((40, 32), vec![[7.0, 9.0]; 6]));
+        let cluster = (0..200)
+            .map(|_| [20.0 + r() * 0.01, 9.0 + r() * 0.01])
+            .collect();
+        sets.push(((40, 32), cluster));
+        let outside = (0..300)
+            .map(|_| [r() * 120.0 - 40.0, r() * 90.0 - 30.0])
+            .collect();
+        sets.push(((40, 32), outside));
+        for (src, pts) in &sets {
+            for c in [1usize, 3] {
+                let cols: Vec<u8> = (0..pts.len() * c).map(|_| (r() * 256.0) as u8).collect();
+                let (w0, h0) = *src;
+                for (w, h) in [
+                    (w0, h0),
+                    (1, 1),
+                    (7, 5),
+                    (w0 / 3 + 1, h0 / 4 + 1),
+                    (2 * w0 + 1, 2 * h0),
+                    (5 * w0, 3 * h0 + 1),
+                ] {
+                    let want = brute(*src, c, pts, &cols, w, h);
+                    for parallel in [false, true] {
+                        let opts = RenderOptions::default().with_parallel(parallel);
+                        let got = render_with(*src, c, pts, &cols, Method::Shepard, w, h, opts);
+                        assert!(got == want, "{} samples, {c} channels, {w}x{h}", pts.len());
+                    }
                 }
             }
         }
