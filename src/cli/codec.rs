@@ -384,7 +384,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
             h.total_samples,
             h.first_level
         );
-        println!("coding: {:?}", h.coding);
+        println!("coding: {}", h.coding);
         match h.lattice {
             Some(l) => println!(
                 "lattice: root {} px, origin ({}, {}) px",

@@ -97,6 +97,24 @@ impl Coding {
     }
 }
 
+/// How `qcs info` names a coding.
+///
+/// ```
+/// use qcs::container::Coding;
+/// assert_eq!(Coding::Raw { bits: 8 }.to_string(), "raw, 8 bits per channel");
+/// assert_eq!(Coding::Predictive { step: 7 }.to_string(), "predictive, step 7");
+/// assert_eq!(Coding::Predictive { step: 1 }.to_string(), "predictive, lossless (step 1)");
+/// ```
+impl std::fmt::Display for Coding {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Coding::Raw { bits } => write!(f, "raw, {bits} bits per channel"),
+            Coding::Predictive { step: 1 } => write!(f, "predictive, lossless (step 1)"),
+            Coding::Predictive { step } => write!(f, "predictive, step {step}"),
+        }
+    }
+}
+
 /// Explicit lattice fields (present when flags bit 0 is set), in 16.16 fixed point pixels.
 ///
 /// Without them the decoder uses the default lattice of spec/sites.md.

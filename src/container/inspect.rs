@@ -243,14 +243,7 @@ impl std::fmt::Display for Inspection {
                     h.first_level,
                     h.level_count()
                 )?;
-                match &h.coding {
-                    super::Coding::Raw { bits } => {
-                        writeln!(f, "coding: raw, {bits} bits per channel")?
-                    }
-                    super::Coding::Predictive { step } => {
-                        writeln!(f, "coding: predictive, step {step}")?
-                    }
-                }
+                writeln!(f, "coding: {}", h.coding)?;
                 match &h.lattice {
                     None => writeln!(f, "lattice: default")?,
                     Some(l) => writeln!(
