@@ -72,12 +72,8 @@ pub fn encode_first(header: &[u8], payload: &[u8]) -> Option<Vec<u8>> {
 /// assert_eq!(bytes.len(), 8);
 /// ```
 pub fn encode(tag: u8, payload: &[u8]) -> Option<Vec<u8>> {
-    let len = u32::try_from(payload.len()).ok()?;
-    let mut out = Vec::with_capacity(payload.len() + 10);
-    out.push(tag);
-    varint::write_u32(&mut out, len);
-    out.extend_from_slice(payload);
-    let crc = crc32fast::hash(&out);
-    out.extend_from_slice(&crc.to_le_bytes());
+    // The same framing as level 0's, with the tag in front in place of the header.
+    let mut out = vec![tag];
+    out.extend(encode_first(&[tag], payload)?);
     Some(out)
 }
