@@ -18,8 +18,11 @@ pub const MAX_HEADER_LEN: usize = 2 + 1 + 5 + 5 + 1 + 10 + 10 + 1 + 5 + 5 + 5 + 
 /// assert_eq!(qcs::container::header_check(b"123456789"), 0xF4);
 /// ```
 pub fn header_check(bytes: &[u8]) -> u8 {
-    crc::Crc::<u8>::new(&crc::CRC_8_SMBUS).checksum(bytes)
+    CRC_8_SMBUS.checksum(bytes)
 }
+
+/// The CRC-8/SMBUS table, built at compile time.
+const CRC_8_SMBUS: crc::Crc<u8> = crc::Crc::<u8>::new(&crc::CRC_8_SMBUS);
 
 /// The format byte's bits: lattice fields present, and the coding's and layout's positions.
 const LATTICE_BIT: u8 = 0x10;
