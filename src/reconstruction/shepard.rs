@@ -208,7 +208,7 @@ impl<const C: usize> Cands<C> {
             self.found = pairs.iter().map(|e| e.0).collect();
             self.slots = pairs.iter().map(|e| e.1).collect();
         } else {
-            sort(&mut self.found);
+            self.found.sort_unstable();
         }
     }
 
@@ -389,23 +389,6 @@ impl<const C: usize> Cands<C> {
             // Saturating cast: round half up, clamp to 0..=255 (NaN → 0), as `super::store`.
             *p = (v + 0.5) as u8;
         }
-    }
-}
-
-/// Sorts a short list by insertion (long ones by the library).
-fn sort(v: &mut [u64]) {
-    if v.len() > 48 {
-        v.sort_unstable();
-        return;
-    }
-    for i in 1..v.len() {
-        let e = v[i];
-        let mut j = i;
-        while j > 0 && v[j - 1] > e {
-            v[j] = v[j - 1];
-            j -= 1;
-        }
-        v[j] = e;
     }
 }
 
