@@ -151,9 +151,10 @@ pub(crate) struct LiveCells {
     locator: Locator,
 }
 
-/// A coarse grid over the hull's bounding box (in lattice coordinates) holding, per bucket,
-/// a triangle near it: progressive sites are spread over the whole image, so walking from
-/// the last insertion would cross O(√n) triangles.
+/// A uniform grid over the points' bounding box (in lattice coordinates) holding, per
+/// bucket, the last vertex inserted there; a walk starts from a triangle of that vertex.
+/// Progressive sites are spread over the whole image, so walking from the last insertion
+/// would cross O(√n) triangles; from a vertex in the same bucket it crosses a few.
 #[derive(Clone, Debug)]
 struct Locator {
     origin: [f64; 2],
@@ -165,27 +166,23 @@ struct Locator {
 }
 
 impl Locator {
+    /// A grid of about two vertices per bucket over the vertices of `mesh`.
     fn new(mesh: &Mesh, pt: &impl Fn(u32) -> ZZeta, points: usize) -> Locator {
-        // Each live triangle's centroid, computed once.
-        let centres: Vec<(u32, [f64; 2])> = (0..mesh.tri.len())
-            .filter(|&t| mesh.alive[t])
-            .map(|t| {
-                let v = mesh.tri[t].map(|i| pt(i).to_f64());
-                let c = [
-                    (v[0].0 + v[1].0 + v[2].0) / 3.0,
-                    (v[0].1 + v[1].1 + v[2].1) / 3.0,
-                ];
-                (t as u32, c)
+        let at: Vec<(u32, [f64; 2])> = (0..mesh.vtri.len() as u32)
+            .filter(|&v| mesh.vtri[v as usize] != NONE)
+            .map(|v| {
+                let (re, im) = pt(v).to_f64();
+                (v, [re, im])
             })
             .collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for (_, c) in &centres {
+        for (_, c) in &at {
             for k in 0..2 {
                 lo[k] = lo[k].min(c[k]);
                 hi[k] = hi[k].max(c[k]);
             }
         }
-        let side = ((mesh.tri.len() as f64).sqrt() / 2.0).clamp(1.0, 4096.0) as usize;
+        let side = ((at.len() as f64 / 2.0).sqrt()).clamp(1.0, 4096.0) as usize;
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
         let mut l = Locator {
             origin: lo,
@@ -194,9 +191,9 @@ impl Locator {
             buckets: vec![NONE; side * side],
             sized_for: points,
         };
-        for &(t, c) in &centres {
+        for &(v, c) in &at {
             let k = l.bucket(c);
-            l.buckets[k] = t;
+            l.buckets[k] = v;
         }
         l
     }
@@ -209,15 +206,30 @@ impl Locator {
         f(1) * self.side + f(0)
     }
 
+    /// A Morton (Z-order) key of `x`'s position on a 2^16 × 2^16 grid over the box.
+    fn morton(&self, x: ZZeta) -> u64 {
+        let (re, im) = x.to_f64();
+        let scale = self.inv * 65536.0 / self.side as f64;
+        let q = |v: f64, o: f64| ((v - o) * scale).clamp(0.0, 65535.0) as u64;
+        let spread = |mut v: u64| {
+            v = (v | (v << 8)) & 0x00ff_00ff;
+            v = (v | (v << 4)) & 0x0f0f_0f0f;
+            v = (v | (v << 2)) & 0x3333_3333;
+            (v | (v << 1)) & 0x5555_5555
+        };
+        spread(q(re, self.origin[0])) | (spread(q(im, self.origin[1])) << 1)
+    }
+
+    /// A vertex near `x`, if its bucket has one.
     fn hint(&self, x: ZZeta) -> u32 {
         let (re, im) = x.to_f64();
         self.buckets[self.bucket([re, im])]
     }
 
-    fn note(&mut self, x: ZZeta, t: u32) {
+    fn note(&mut self, x: ZZeta, v: u32) {
         let (re, im) = x.to_f64();
         let k = self.bucket([re, im]);
-        self.buckets[k] = t;
+        self.buckets[k] = v;
     }
 }
 
@@ -239,6 +251,7 @@ impl LiveCells {
         let mut m = Mesh::new(mesh)?;
         m.remove_slivers(&pt)?;
         let (flips, merge) = m.lawson(&pt)?;
+        m.index_vertices();
         let locator = Locator::new(&m, &pt, lattice.len());
         Some(LiveCells {
             mesh: m,
@@ -265,32 +278,53 @@ impl LiveCells {
     /// or anything unexpected) the state is unusable and the caller builds afresh.
     pub(crate) fn extend(&mut self, lattice: &[Option<ZZeta>]) -> Result<(), Rebuild> {
         let mut touched = Vec::new();
-        for i in self.points..lattice.len() {
-            let x = lattice[i]
-                .filter(|&x| crate::lattice::within_exact_limit(x))
-                .ok_or(Rebuild)?;
-            let pt = |j: u32| {
-                lattice
-                    .get(j as usize)
-                    .copied()
-                    .flatten()
-                    .unwrap_or(ZZeta([0; 4]))
-            };
-            self.insert(i as u32, x, &pt, &mut touched)?;
+        let pt = |j: u32| {
+            lattice
+                .get(j as usize)
+                .copied()
+                .flatten()
+                .unwrap_or(ZZeta([0; 4]))
+        };
+        // Rounds of doubling size, each in Morton order: progressive points are spread over
+        // the whole image, so inserting them as they come touches cold memory at every
+        // step, while the cells do not depend on the insertion order.
+        let mut round: Vec<(u64, u32)> = Vec::new();
+        let mut lo = self.points;
+        while lo < lattice.len() {
+            let hi = lattice.len().min(2 * lo).max(lo + 1);
+            round.clear();
+            for i in lo..hi {
+                let x = lattice[i]
+                    .filter(|&x| crate::lattice::within_exact_limit(x))
+                    .ok_or(Rebuild)?;
+                round.push((self.locator.morton(x), i as u32));
+            }
+            round.sort_unstable();
+            for &(_, i) in &round {
+                self.insert(i, pt(i), &pt, &mut touched)?;
+            }
+            if hi > 2 * self.locator.sized_for {
+                self.locator = Locator::new(&self.mesh, &pt, hi);
+            }
+            lo = hi;
         }
         self.points = lattice.len();
-        if self.points > 4 * self.locator.sized_for {
-            let pt = |j: u32| lattice[j as usize].unwrap_or(ZZeta([0; 4]));
-            self.locator = Locator::new(&self.mesh, &pt, self.points);
-        }
         // Cocircularity of every edge of a triangle that changed, seen from both sides.
         let pt = |j: u32| lattice[j as usize].unwrap_or(ZZeta([0; 4]));
-        touched.sort_unstable();
-        touched.dedup();
+        let mut mark = vec![false; self.mesh.tri.len()];
         for &t in &touched {
-            let t = t as usize;
+            mark[t as usize] = true;
+        }
+        for t in 0..mark.len() {
+            if !mark[t] {
+                continue;
+            }
             let v = self.mesh.tri[t].map(pt);
             for i in 0..3 {
+                let u = self.mesh.nbr[t][i] as usize;
+                if u < t && mark[u] {
+                    continue; // tested from `u`
+                }
                 let Some((j, d)) = self.mesh.across(t, i) else {
                     self.merge[t][i] = false;
                     continue;
@@ -313,7 +347,13 @@ impl LiveCells {
     ) -> Result<(), Rebuild> {
         let m = &mut self.mesh;
         // Visibility walk from a triangle near the point.
-        let mut t = self.locator.hint(x) as usize;
+        let mut t = match self.locator.hint(x) {
+            NONE => NONE as usize,
+            v => m
+                .vtri
+                .get(v as usize)
+                .map_or(NONE as usize, |&t| t as usize),
+        };
         if t >= m.tri.len() || !m.alive[t] {
             t = m.alive.iter().position(|&a| a).ok_or(Rebuild)?;
         }
@@ -353,6 +393,7 @@ impl LiveCells {
                 m.push([a, b, i], [t1, t2, nc]);
                 m.relink(nb, t1, t2);
                 m.relink(nc, t1, t3);
+                m.touch(t1);
                 self.merge.resize(m.tri.len(), [false; 3]);
                 self.merge[t] = [false; 3];
                 stack.extend([(t1, 2), (t2, 2), (t3, 2)]);
@@ -379,6 +420,8 @@ impl LiveCells {
                 m.push([d, i, b], [t1, u_bd, u1]);
                 m.relink(t_ca, t1, t2);
                 m.relink(u_bd, u1, u2);
+                m.touch(t1);
+                m.touch(u1);
                 self.merge.resize(m.tri.len(), [false; 3]);
                 self.merge[t] = [false; 3];
                 self.merge[u] = [false; 3];
@@ -391,7 +434,7 @@ impl LiveCells {
                 return if v.contains(&x) { Ok(()) } else { Err(Rebuild) };
             }
         }
-        self.locator.note(x, t as u32);
+        self.locator.note(x, i);
         // Lawson flips around the new point.
         let budget = 8 * m.tri.len() + 64;
         let mut flips = 0usize;
@@ -430,6 +473,8 @@ struct Mesh {
     tri: Vec<[u32; 3]>,
     nbr: Vec<[u32; 3]>,
     alive: Vec<bool>,
+    /// Per vertex (point index): a live triangle that has it, or `NONE`.
+    vtri: Vec<u32>,
 }
 
 impl Mesh {
@@ -453,8 +498,41 @@ impl Mesh {
                 }
             }
         }
-        let alive = vec![true; n];
-        Some(Mesh { tri, nbr, alive })
+        let mut m = Mesh {
+            tri,
+            nbr,
+            alive: vec![true; n],
+            vtri: Vec::new(),
+        };
+        m.index_vertices();
+        Some(m)
+    }
+
+    /// Recomputes [`Mesh::vtri`] from the live triangles.
+    fn index_vertices(&mut self) {
+        let top = self
+            .tri
+            .iter()
+            .flatten()
+            .max()
+            .map_or(0, |&v| v as usize + 1);
+        self.vtri = vec![NONE; top];
+        for t in 0..self.tri.len() {
+            if self.alive[t] {
+                self.touch(t as u32);
+            }
+        }
+    }
+
+    /// Records `t` as the triangle of each of its vertices.
+    fn touch(&mut self, t: u32) {
+        for v in self.tri[t as usize] {
+            let v = v as usize;
+            if v >= self.vtri.len() {
+                self.vtri.resize(v + 1, NONE);
+            }
+            self.vtri[v] = t;
+        }
     }
 
     /// Appends a triangle.
@@ -462,6 +540,7 @@ impl Mesh {
         self.tri.push(tri);
         self.nbr.push(nbr);
         self.alive.push(true);
+        self.touch(self.tri.len() as u32 - 1);
     }
 
     /// The neighbour across the edge opposite vertex `i` of `t`: its slot `j` for that edge
@@ -512,6 +591,8 @@ impl Mesh {
         self.nbr[u as usize] = [nu_b, nt_b, t];
         self.relink(nu_c, u, t);
         self.relink(nt_b, t, u);
+        self.touch(t);
+        self.touch(u);
         Some((t, u))
     }
 
