@@ -7,15 +7,23 @@
 //! * `cells_build`: the canonical cells from the kept triangulation (what a streaming render
 //!   recomputes after new samples arrived).
 //!
+//!
+//! Group `exact_cells` (16k, 65k, 262k sites on 1024², samples and mirror points) times how
+//! the canonical cells are made, from the points alone: `spade_bulk_load` (spade's
+//! triangulation only, not yet the cells), `spade_then_exact` (that, then exact flips and
+//! merges: `Cells::build`) and `incremental` (exact insertion: `Cells::incremental`, what a
+//! `SampleSet` does).
+//!
 //! Run: `cargo bench --bench cells -- --warm-up-time 1 --measurement-time 3`
 
 use std::hint::black_box;
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use image::{imageops::FilterType, RgbImage};
 use qcs::lattice::ZZeta;
-use qcs::reconstruction::{Cells, Method, RenderOptions, SampleSet};
+use qcs::reconstruction::{Cells, Method, RenderOptions, SampleSet, Triangulation, Vertex};
 use qcs::sites::Quasicrystal;
+use spade::{Point2, Triangulation as _};
 
 const SIDE: u32 = 1024;
 const COUNTS: [usize; 2] = [16_384, 65_536];
@@ -64,5 +72,43 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+fn exact_cells(c: &mut Criterion) {
+    let mut g = c.benchmark_group("exact_cells");
+    g.sample_size(10);
+    for n in [16_384, 65_536, 262_144] {
+        let mut set = SampleSet::new(SIDE, SIDE, 1);
+        for s in Quasicrystal::new(SIDE, SIDE).expect("frame").first(n) {
+            set.push_exact(s.pos, s.lattice, &[0]);
+        }
+        let lattice = set.point_lattice().to_vec();
+        let vertices: Vec<Vertex> = set
+            .points()
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Vertex {
+                position: Point2::new(p[0], p[1]),
+                index: k as u32,
+            })
+            .collect();
+        g.throughput(Throughput::Elements(n as u64));
+        g.bench_function(BenchmarkId::new("spade_bulk_load", n), |b| {
+            b.iter(|| {
+                let t = Triangulation::bulk_load_stable(vertices.clone()).expect("spade");
+                black_box(t.num_inner_faces())
+            })
+        });
+        g.bench_function(BenchmarkId::new("spade_then_exact", n), |b| {
+            b.iter(|| {
+                let t = Triangulation::bulk_load_stable(vertices.clone()).expect("spade");
+                black_box(Cells::build(&t, &lattice).map(|c| c.len()))
+            })
+        });
+        g.bench_function(BenchmarkId::new("incremental", n), |b| {
+            b.iter(|| black_box(Cells::incremental(set.points(), &lattice).map(|c| c.len())))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, exact_cells);
 criterion_main!(benches);

@@ -142,7 +142,14 @@ pub fn incircle(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
     if det < -bound {
         return -1;
     }
-    if m < 2048.0 && small_incircle_is_zero(p, q, r) {
+    incircle_exact(a, b, c, d)
+}
+
+/// [`incircle`] without its floating-point filter, for callers whose own filter already
+/// failed: the zero test in `i64` when the differences are small, else the exact value.
+pub(crate) fn incircle_exact(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
+    let (p, q, r) = (diff(a, d), diff(b, d), diff(c, d));
+    if l1(p).max(l1(q)).max(l1(r)) < 2048.0 && small_incircle_is_zero(p, q, r) {
         return 0;
     }
     incircle_value(a, b, c, d).signum()

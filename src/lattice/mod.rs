@@ -10,6 +10,7 @@ mod incircle;
 pub use cut_and_project::{disk_candidates, one_d};
 pub use cyclotomic::{decagon_forms, sign_plus_sin72, zeta_f64, ZZeta, SIN72};
 pub use golden::{order_key, ZTau, TAU};
+pub(crate) use incircle::incircle_exact;
 pub use incircle::{
     incircle, incircle_value, orient, orient_value, within_exact_limit, EXACT_LIMIT,
 };

@@ -45,6 +45,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod cells;
+mod delaunay;
 mod gouraud;
 mod hull;
 mod mesh;
@@ -60,7 +61,7 @@ use crate::lattice::ZZeta;
 use crate::sites::{Frame as LatticeFrame, Point};
 
 pub use cells::Cells;
-use cells::LiveCells;
+use delaunay::LiveCells;
 pub use gouraud::{cell_triangles, triangles};
 pub use mesh::{Triangulation, Vertex};
 #[doc(hidden)]
@@ -414,10 +415,9 @@ impl SampleSet {
     /// has an exact lattice point (and there are at least three points, not all collinear).
     ///
     /// The exact triangulation behind them is kept: points added since the last call are
-    /// inserted locally (each splits the triangle it falls in, exact flips repair the
-    /// Delaunay property around it, and only the changed triangles' edges are tested for
-    /// cocircularity again). A point outside the current hull makes it start afresh from
-    /// `spade`'s triangulation. Either way the cells are the same.
+    /// inserted locally (each splits the triangle it falls in, or joins the hull edges it
+    /// sees, exact flips repair the Delaunay property around it, and only the changed
+    /// triangles' edges are tested for cocircularity again).
     pub fn cells(&mut self) -> Option<&Cells> {
         self.sync_cells();
         self.cells.as_ref().and_then(|(_, c)| c.as_ref())
@@ -446,11 +446,14 @@ impl SampleSet {
             None => false,
         };
         if !grown {
-            mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
-            self.live = LiveCells::build(&self.mesh, &pts.lattice);
+            // By exact insertion; spade's whole triangulation only if that gives up.
+            self.live = LiveCells::grow(&pts.positions, &pts.lattice).or_else(|| {
+                mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
+                LiveCells::build(&self.mesh, &pts.lattice)
+            });
             self.rebuilds += 1;
         }
-        let cells = self.live.as_ref().map(|l| l.cells(&pts.lattice));
+        let cells = self.live.as_ref().map(LiveCells::cells);
         self.cells = Some((n, cells.filter(|c| !c.is_empty())));
     }
 

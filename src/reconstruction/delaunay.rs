@@ -1,0 +1,923 @@
+//! The exact Delaunay triangulation of lattice points behind the canonical cells.
+//!
+//! Points are kept under compact internal ids, in the order they were inserted, with their
+//! exact point in Z\[ζ\] and its `f64` position: the predicates decide from the cached
+//! positions with a proven error bound and fall back to the exact ones of
+//! [`crate::lattice::incircle`] only near zero (which, in a quasicrystal full of cocircular
+//! sites, is every merged cell).
+//!
+//! A triangulation is started from `spade`'s (bulk loaded for a whole set, or for the first
+//! few points of a progressive one) and grown by local insertion: a new point splits the
+//! triangle (or the two triangles of the edge) it falls in, or is joined to the hull edges it
+//! sees from outside, and exact Lawson flips restore the Delaunay property around it. Points are inserted in rounds of doubling size, each round in
+//! Z-order, so that consecutive insertions are neighbours in the plane and in memory (the
+//! triangulation does not depend on the order, the cells built from it even less).
+
+use spade::Triangulation as _;
+
+use super::cells::Cells;
+use super::mesh::{self, Triangulation};
+use crate::lattice::{incircle_exact, orient_value, within_exact_limit, ZZeta};
+use crate::sites::Point;
+
+const NONE: u32 = u32::MAX;
+
+/// Lattice points under internal ids: exact, cached in `f64`, and their point index.
+#[derive(Clone, Debug, Default)]
+struct Store {
+    zz: Vec<ZZeta>,
+    /// `(Re, Im)` in `f64` and a bound on the error of either.
+    xy: Vec<[f64; 3]>,
+    /// Internal id → point index.
+    ext: Vec<u32>,
+}
+
+/// `max` without `f64::max`'s NaN handling (no NaN arises here).
+#[inline(always)]
+fn fmax(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+const EPS: f64 = f64::EPSILON;
+
+impl Store {
+    fn push(&mut self, x: ZZeta, ext: u32) -> u32 {
+        let (re, im) = x.to_f64();
+        // `to_f64` multiplies exact integers by cos/sin constants (|c| ≤ 1) and adds four
+        // terms: within 4ε·Σ|n_k|; doubled for margin.
+        let m: f64 = x.0.iter().map(|&n| n.unsigned_abs() as f64).sum();
+        self.zz.push(x);
+        self.xy.push([re, im, 8.0 * EPS * m]);
+        self.ext.push(ext);
+        self.zz.len() as u32 - 1
+    }
+
+    fn reserve(&mut self, n: usize) {
+        self.zz.reserve(n);
+        self.xy.reserve(n);
+        self.ext.reserve(n);
+    }
+
+    fn pop(&mut self) {
+        self.zz.pop();
+        self.xy.pop();
+        self.ext.pop();
+    }
+
+    fn len(&self) -> usize {
+        self.zz.len()
+    }
+
+    /// Exact orientation of `a, b, c` (as [`crate::lattice::orient`]): decided from the
+    /// cached positions unless they are within their error bound of collinear.
+    #[inline]
+    fn orient(&self, a: u32, b: u32, c: u32) -> i32 {
+        let (pa, pb, pc) = (
+            self.xy[a as usize],
+            self.xy[b as usize],
+            self.xy[c as usize],
+        );
+        let (px, py, qx, qy) = (pb[0] - pa[0], pb[1] - pa[1], pc[0] - pa[0], pc[1] - pa[1]);
+        let det = px * qy - py * qx;
+        // Each difference errs by ≤ h (both ends' error, and rounding), so each product by
+        // ≤ M·h + (M + h)·h; the two roundings of the products and the one of their
+        // difference add ≤ 3ε·M². Doubled for margin.
+        let mm = fmax(fmax(px.abs(), py.abs()), fmax(qx.abs(), qy.abs()));
+        let h = pa[2] + fmax(pb[2], pc[2]) + EPS * mm;
+        let bound = 2.0 * (4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * mm * mm);
+        if det > bound {
+            1
+        } else if det < -bound {
+            -1
+        } else {
+            let z = &self.zz;
+            orient_value(z[a as usize], z[b as usize], z[c as usize]).signum()
+        }
+    }
+
+    /// Exact incircle test of `d` against `a, b, c` (as [`crate::lattice::incircle`]):
+    /// decided from the cached positions unless they are within their error bound of
+    /// cocircular.
+    #[inline]
+    fn incircle(&self, a: u32, b: u32, c: u32, d: u32) -> i32 {
+        let (pa, pb, pc, pd) = (
+            self.xy[a as usize],
+            self.xy[b as usize],
+            self.xy[c as usize],
+            self.xy[d as usize],
+        );
+        let (ax, ay) = (pa[0] - pd[0], pa[1] - pd[1]);
+        let (bx, by) = (pb[0] - pd[0], pb[1] - pd[1]);
+        let (cx, cy) = (pc[0] - pd[0], pc[1] - pd[1]);
+        let det = (ax * ax + ay * ay) * (bx * cy - cx * by)
+            - (bx * bx + by * by) * (ax * cy - cx * ay)
+            + (cx * cx + cy * cy) * (ax * by - bx * ay);
+        // Minors (≤ 2M²) err as an orientation, lifts (≤ 2M²) by ≤ 4Mh + 2h² + 6εM²; three
+        // products of ≤ 4M⁴ and two sums add ≤ 24εM⁴ of rounding. Doubled for margin.
+        let mm = fmax(
+            fmax(fmax(ax.abs(), ay.abs()), fmax(bx.abs(), by.abs())),
+            fmax(cx.abs(), cy.abs()),
+        );
+        let h = pd[2] + fmax(fmax(pa[2], pb[2]), pc[2]) + EPS * mm;
+        let m2 = mm * mm;
+        let hm = 4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * m2;
+        let hw = hm + 3.0 * EPS * m2;
+        let bound = 2.0 * (3.0 * (2.0 * m2 * hm + (2.0 * m2 + hm) * hw) + 24.0 * EPS * m2 * m2);
+        if det > bound {
+            1
+        } else if det < -bound {
+            -1
+        } else {
+            let z = &self.zz;
+            incircle_exact(z[a as usize], z[b as usize], z[c as usize], z[d as usize])
+        }
+    }
+}
+
+/// A uniform grid over the points' bounding box holding, per bucket, the last vertex
+/// inserted there; a walk starts from a triangle of that vertex. Progressive sites are
+/// spread over the whole image, so walking from the last insertion would cross O(√n)
+/// triangles; from a vertex in the same bucket it crosses a few.
+#[derive(Clone, Debug)]
+struct Locator {
+    origin: [f64; 2],
+    inv: f64,
+    side: usize,
+    buckets: Vec<u32>,
+    /// Vertex count the grid was sized for.
+    sized_for: usize,
+}
+
+impl Locator {
+    /// A grid of about two vertices per bucket.
+    fn new(store: &Store) -> Locator {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for c in &store.xy {
+            for k in 0..2 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        let side = ((store.len() as f64 / 2.0).sqrt()).clamp(1.0, 4096.0) as usize;
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
+        let mut l = Locator {
+            origin: lo,
+            inv: (side as f64 - 1e-9) / extent,
+            side,
+            buckets: vec![NONE; side * side],
+            sized_for: store.len(),
+        };
+        for (v, &[x, y, _]) in store.xy.iter().enumerate() {
+            let k = l.bucket([x, y]);
+            l.buckets[k] = v as u32;
+        }
+        l
+    }
+
+    fn bucket(&self, p: [f64; 2]) -> usize {
+        let f = |k: usize| {
+            let v = ((p[k] - self.origin[k]) * self.inv).floor();
+            v.clamp(0.0, self.side as f64 - 1.0) as usize
+        };
+        f(1) * self.side + f(0)
+    }
+
+    /// A Morton (Z-order) key of `p` on a 2^16 × 2^16 grid over the box.
+    fn morton(&self, p: [f64; 2]) -> u64 {
+        let scale = self.inv * 65536.0 / self.side as f64;
+        let q = |k: usize| ((p[k] - self.origin[k]) * scale).clamp(0.0, 65535.0) as u64;
+        let spread = |mut v: u64| {
+            v = (v | (v << 8)) & 0x00ff_00ff;
+            v = (v | (v << 4)) & 0x0f0f_0f0f;
+            v = (v | (v << 2)) & 0x3333_3333;
+            (v | (v << 1)) & 0x5555_5555
+        };
+        spread(q(0)) | (spread(q(1)) << 1)
+    }
+}
+
+/// Why a point could not be inserted locally (the caller rebuilds from scratch).
+#[derive(Debug)]
+pub(crate) struct Rebuild;
+
+/// How many points of a progressive set are bulk loaded by `spade` before the rest is
+/// inserted (so that a degenerate start, all points collinear, is `spade`'s to handle).
+const SEED: usize = 64;
+
+/// The exact Delaunay triangulation behind the canonical cells, kept so that new points can
+/// be inserted locally (streaming): only the edges of the triangles that changed are tested
+/// for cocircularity again.
+#[derive(Clone, Debug)]
+pub(crate) struct LiveCells {
+    store: Store,
+    /// Point index → internal id (`NONE`: not a vertex, e.g. a repeated position).
+    int_of: Vec<u32>,
+    mesh: Mesh,
+    /// Per triangle slot: whether the edge opposite vertex `i` joins two cocircular triangles.
+    merge: Vec<[bool; 3]>,
+    flips: usize,
+    /// Points inserted so far (`0..points` of the lattice list).
+    pub(crate) points: usize,
+    /// Where to start locating a point.
+    locator: Locator,
+}
+
+impl LiveCells {
+    /// From any Delaunay triangulation of `lattice[0..n]` (`mesh` vertices index `lattice`).
+    pub(crate) fn build(mesh: &Triangulation, lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
+        let mut store = Store::default();
+        let mut int_of = vec![NONE; lattice.len()];
+        for v in mesh.vertices() {
+            let i = v.data().index;
+            let x = lattice
+                .get(i as usize)
+                .copied()
+                .flatten()
+                .filter(|&x| within_exact_limit(x))?;
+            int_of[i as usize] = store.push(x, i);
+        }
+        let mut m = Mesh::new(mesh, &int_of)?;
+        m.remove_slivers(&store)?;
+        let (flips, merge) = m.lawson(&store)?;
+        m.index_vertices(store.len());
+        let locator = Locator::new(&store);
+        Some(LiveCells {
+            store,
+            int_of,
+            mesh: m,
+            merge,
+            flips,
+            points: lattice.len(),
+            locator,
+        })
+    }
+
+    /// For a whole progressive set (sample order, mirror points after their sample): `spade`
+    /// bulk loads the first points, the rest are inserted. `None` if some point is not exact
+    /// (or the insertion gives up: the caller bulk loads them all).
+    pub(crate) fn grow(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
+        let seed = lattice.len().min(SEED);
+        let mut mesh = Triangulation::new();
+        mesh::sync(&mut mesh, &positions[..seed], &mut 0);
+        let mut live = LiveCells::build(&mesh, &lattice[..seed])?;
+        live.extend(lattice).ok()?;
+        Some(live)
+    }
+
+    /// The cells as they are now.
+    pub(crate) fn cells(&self) -> Cells {
+        self.mesh.cells(&self.store, self.flips, &self.merge)
+    }
+
+    /// Inserts points `self.points..lattice.len()`. On [`Rebuild`] (a point that is not exact,
+    /// or anything unexpected) the state is unusable and the caller builds afresh.
+    pub(crate) fn extend(&mut self, lattice: &[Option<ZZeta>]) -> Result<(), Rebuild> {
+        let new = lattice.len().saturating_sub(self.points);
+        let mut touched = Vec::with_capacity(8 * new);
+        let mut round: Vec<u64> = Vec::new();
+        self.int_of
+            .resize(lattice.len().max(self.int_of.len()), NONE);
+        self.store.reserve(new);
+        self.mesh.reserve(2 * new);
+        self.mesh.vtri.reserve(new);
+        self.merge.reserve(2 * new);
+        let mut lo = self.points;
+        while lo < lattice.len() {
+            let hi = lattice.len().min(2 * lo).max(lo + 1);
+            round.clear();
+            for (i, x) in lattice.iter().enumerate().take(hi).skip(lo) {
+                let x = x.filter(|&x| within_exact_limit(x)).ok_or(Rebuild)?;
+                let (re, im) = x.to_f64();
+                round.push(self.locator.morton([re, im]) << 32 | i as u64);
+            }
+            round.sort_unstable();
+            for &key in &round {
+                let i = key as u32;
+                if let Some(x) = lattice[i as usize] {
+                    self.insert(i, x, &mut touched)?;
+                }
+            }
+            if self.store.len() > 2 * self.locator.sized_for {
+                self.locator = Locator::new(&self.store);
+            }
+            lo = hi;
+        }
+        self.points = lattice.len();
+        // Cocircularity of every edge of a triangle that changed.
+        let mut mark = vec![false; self.mesh.tri.len()];
+        for &t in &touched {
+            mark[t as usize] = true;
+        }
+        for t in 0..mark.len() {
+            if !mark[t] {
+                continue;
+            }
+            let v = self.mesh.tri[t];
+            for i in 0..3 {
+                let u = self.mesh.nbr[t][i] as usize;
+                if u < t && mark[u] {
+                    continue; // tested from `u`
+                }
+                let Some((j, d)) = self.mesh.across(t, i) else {
+                    self.merge[t][i] = false;
+                    continue;
+                };
+                let cocircular = self.store.incircle(v[0], v[1], v[2], d) == 0;
+                self.merge[t][i] = cocircular;
+                self.merge[u][j] = cocircular;
+            }
+        }
+        Ok(())
+    }
+
+    /// Inserts point `i` at `x`: locate, split, flip.
+    fn insert(&mut self, i: u32, x: ZZeta, touched: &mut Vec<u32>) -> Result<(), Rebuild> {
+        let p = self.store.push(x, i);
+        let (m, s) = (&mut self.mesh, &self.store);
+        // Visibility walk from a triangle of a vertex near the point.
+        let [x0, y0, _] = s.xy[p as usize];
+        let b = self.locator.bucket([x0, y0]);
+        let mut t = match self.locator.buckets[b] {
+            NONE => NONE as usize,
+            v => m
+                .vtri
+                .get(v as usize)
+                .map_or(NONE as usize, |&t| t as usize),
+        };
+        if t >= m.tri.len() || !m.alive[t] {
+            t = m.alive.iter().position(|&a| a).ok_or(Rebuild)?;
+        }
+        let mut steps = 0usize;
+        // The three orientations of the point against `t`'s edges, or `Err(k)`: outside the
+        // hull, beyond `t`'s hull edge opposite vertex `k`.
+        let side = loop {
+            let v = m.tri[t];
+            let o = [
+                s.orient(v[1], v[2], p),
+                s.orient(v[2], v[0], p),
+                s.orient(v[0], v[1], p),
+            ];
+            match (0..3).find(|&k| o[k] < 0) {
+                Some(k) => {
+                    let u = m.nbr[t][k];
+                    if u == NONE {
+                        break Err(k);
+                    }
+                    t = u as usize;
+                    steps += 1;
+                    if steps > m.tri.len() + 8 {
+                        return Err(Rebuild);
+                    }
+                }
+                None => break Ok(o),
+            }
+        };
+        let mut stack: Vec<(u32, u8)> = Vec::new();
+        // How many of the orientations are zero, and the slot of the first zero (or the
+        // hull edge the point is beyond).
+        let (zeros, k) = match side {
+            Err(k) => (None, k),
+            Ok(o) => (
+                Some(o.iter().filter(|&&o| o == 0).count()),
+                (0..3).find(|&k| o[k] == 0).unwrap_or(0),
+            ),
+        };
+        match zeros {
+            None => {
+                let first = m.tri.len() as u32;
+                m.attach(s, t as u32, k, p)?;
+                let last = m.tri.len() as u32;
+                self.merge.resize(m.tri.len(), [false; 3]);
+                // Each new triangle is [w, u, p] on an old hull edge u → w.
+                stack.extend((first..last).map(|t| (t, 2)));
+                touched.extend(first..last);
+            }
+            Some(1) if m.nbr[t][k] == NONE => {
+                // On a hull edge (opposite vertex k of t): split t in two.
+                let (a, b, c) = (m.tri[t][k], m.tri[t][(k + 1) % 3], m.tri[t][(k + 2) % 3]);
+                let (t_ab, t_ca) = (m.nbr[t][(k + 2) % 3], m.nbr[t][(k + 1) % 3]);
+                let (t1, t2) = (t as u32, m.tri.len() as u32);
+                m.tri[t] = [a, b, p];
+                m.nbr[t] = [NONE, t2, t_ab];
+                m.push([a, p, c], [NONE, t_ca, t1]);
+                m.relink(t_ca, t1, t2);
+                m.touch(t1);
+                self.merge.resize(m.tri.len(), [false; 3]);
+                self.merge[t] = [false; 3];
+                stack.extend([(t1, 2), (t2, 1)]);
+                touched.extend([t1, t2]);
+            }
+            Some(0) => {
+                let [a, b, c] = m.tri[t];
+                let [na, nb, nc] = m.nbr[t];
+                let (t1, t2, t3) = (t as u32, m.tri.len() as u32, m.tri.len() as u32 + 1);
+                m.tri[t] = [b, c, p];
+                m.nbr[t] = [t2, t3, na];
+                m.push([c, a, p], [t3, t1, nb]);
+                m.push([a, b, p], [t1, t2, nc]);
+                m.relink(nb, t1, t2);
+                m.relink(nc, t1, t3);
+                m.touch(t1);
+                self.merge.resize(m.tri.len(), [false; 3]);
+                self.merge[t] = [false; 3];
+                stack.extend([(t1, 2), (t2, 2), (t3, 2)]);
+                touched.extend([t1, t2, t3]);
+            }
+            Some(1) => {
+                // On the edge opposite vertex k of t: split t and its neighbour into four.
+                let Some((j, _)) = m.across(t, k) else {
+                    return Err(Rebuild);
+                };
+                let u = m.nbr[t][k] as usize;
+                let (a, b, c) = (m.tri[t][k], m.tri[t][(k + 1) % 3], m.tri[t][(k + 2) % 3]);
+                let d = m.tri[u][j];
+                let (t_ab, t_ca) = (m.nbr[t][(k + 2) % 3], m.nbr[t][(k + 1) % 3]);
+                let (u_dc, u_bd) = (m.nbr[u][(j + 2) % 3], m.nbr[u][(j + 1) % 3]);
+                let (t1, u1) = (t as u32, u as u32);
+                let (t2, u2) = (m.tri.len() as u32, m.tri.len() as u32 + 1);
+                m.tri[t] = [a, b, p];
+                m.nbr[t] = [u2, t2, t_ab];
+                m.tri[u] = [d, c, p];
+                m.nbr[u] = [t2, u2, u_dc];
+                m.push([a, p, c], [u1, t_ca, t1]);
+                m.push([d, p, b], [t1, u_bd, u1]);
+                m.relink(t_ca, t1, t2);
+                m.relink(u_bd, u1, u2);
+                m.touch(t1);
+                m.touch(u1);
+                self.merge.resize(m.tri.len(), [false; 3]);
+                self.merge[t] = [false; 3];
+                self.merge[u] = [false; 3];
+                stack.extend([(t1, 2), (t2, 1), (u1, 2), (u2, 1)]);
+                touched.extend([t1, t2, u1, u2]);
+            }
+            Some(_) => {
+                // On a vertex: the same point again (the first is kept).
+                let same = m.tri[t].iter().any(|&v| s.zz[v as usize] == x);
+                self.store.pop();
+                return if same { Ok(()) } else { Err(Rebuild) };
+            }
+        }
+        self.int_of[i as usize] = p;
+        self.locator.buckets[b] = p;
+        // Lawson flips around the new point.
+        let budget = 8 * m.tri.len() + 64;
+        let mut flips = 0usize;
+        while let Some((t, e)) = stack.pop() {
+            let (t, e) = (t as usize, e as usize);
+            let Some((_, d)) = m.across(t, e) else {
+                continue;
+            };
+            let v = m.tri[t];
+            if s.incircle(v[0], v[1], v[2], d) <= 0 {
+                continue;
+            }
+            let (a, b, c) = (v[e], v[(e + 1) % 3], v[(e + 2) % 3]);
+            if s.orient(a, b, d) <= 0 || s.orient(a, d, c) <= 0 {
+                return Err(Rebuild);
+            }
+            flips += 1;
+            if flips > budget {
+                return Err(Rebuild);
+            }
+            let (t1, t2) = m.flip(t as u32, e).ok_or(Rebuild)?;
+            // New triangles are [a, b, d] and [a, d, c], a the new point: their edges
+            // opposite a are the ones to check.
+            stack.extend([(t1, 0), (t2, 0)]);
+            touched.extend([t1, t2]);
+        }
+        self.flips += flips;
+        Ok(())
+    }
+}
+
+/// Triangles with neighbours: `nbr[t][i]` is across the edge opposite `tri[t][i]`.
+#[derive(Clone, Debug)]
+struct Mesh {
+    tri: Vec<[u32; 3]>,
+    nbr: Vec<[u32; 3]>,
+    alive: Vec<bool>,
+    /// Per vertex: a live triangle that has it, or `NONE`.
+    vtri: Vec<u32>,
+}
+
+impl Mesh {
+    /// Triangles and adjacency from `spade` (inner face `k` has index `k + 1` there), with
+    /// vertices renamed by `int_of`.
+    fn new(mesh: &Triangulation, int_of: &[u32]) -> Option<Mesh> {
+        let n = mesh.num_inner_faces();
+        let mut tri = vec![[0u32; 3]; n];
+        let mut nbr = vec![[NONE; 3]; n];
+        for f in mesh.inner_faces() {
+            let t = f.fix().index().checked_sub(1).filter(|&t| t < n)?;
+            let vs = f.vertices().map(|v| v.fix());
+            tri[t] = vs.map(|v| int_of[mesh.vertex(v).data().index as usize]);
+            for e in f.adjacent_edges() {
+                // Edge v_k → v_{k+1} is opposite v_{k+2}.
+                let k = vs.iter().position(|&v| v == e.from().fix())?;
+                if vs[(k + 1) % 3] != e.to().fix() {
+                    return None;
+                }
+                if let Some(g) = e.rev().face().as_inner() {
+                    nbr[t][(k + 2) % 3] = g.fix().index().checked_sub(1).filter(|&u| u < n)? as u32;
+                }
+            }
+        }
+        Some(Mesh {
+            tri,
+            nbr,
+            alive: vec![true; n],
+            vtri: Vec::new(),
+        })
+    }
+
+    fn reserve(&mut self, triangles: usize) {
+        self.tri.reserve(triangles);
+        self.nbr.reserve(triangles);
+        self.alive.reserve(triangles);
+    }
+
+    /// Recomputes [`Mesh::vtri`] from the live triangles.
+    fn index_vertices(&mut self, vertices: usize) {
+        self.vtri = vec![NONE; vertices];
+        for t in 0..self.tri.len() {
+            if self.alive[t] {
+                self.touch(t as u32);
+            }
+        }
+    }
+
+    /// Records `t` as the triangle of each of its vertices.
+    fn touch(&mut self, t: u32) {
+        for v in self.tri[t as usize] {
+            let v = v as usize;
+            if v >= self.vtri.len() {
+                self.vtri.resize(v + 1, NONE);
+            }
+            self.vtri[v] = t;
+        }
+    }
+
+    /// The hull edge after the hull edge opposite vertex `k` of `t` (counter-clockwise
+    /// around the hull), as (triangle, slot): found by turning around their shared vertex.
+    fn hull_next(&self, mut t: usize, k: usize) -> Option<(usize, usize)> {
+        let b = self.tri[t][(k + 2) % 3];
+        for _ in 0..self.tri.len() {
+            let ib = self.tri[t].iter().position(|&v| v == b)?;
+            // The edge leaving b is opposite the vertex before b.
+            let slot = (ib + 2) % 3;
+            match self.nbr[t][slot] {
+                NONE => return Some((t, slot)),
+                u => t = u as usize,
+            }
+        }
+        None
+    }
+
+    /// The hull edge before the hull edge opposite vertex `k` of `t`.
+    fn hull_prev(&self, mut t: usize, k: usize) -> Option<(usize, usize)> {
+        let a = self.tri[t][(k + 1) % 3];
+        for _ in 0..self.tri.len() {
+            let ia = self.tri[t].iter().position(|&v| v == a)?;
+            // The edge arriving at a is opposite the vertex after a.
+            let slot = (ia + 1) % 3;
+            match self.nbr[t][slot] {
+                NONE => return Some((t, slot)),
+                u => t = u as usize,
+            }
+        }
+        None
+    }
+
+    /// Joins `p`, outside the hull beyond the hull edge opposite vertex `k` of `t`, to every
+    /// hull edge it strictly sees (a contiguous chain): one new triangle `[w, u, p]` per edge
+    /// `u → w`, appended in hull order.
+    fn attach(&mut self, s: &Store, t: u32, k: usize, p: u32) -> Result<(), Rebuild> {
+        let tri = &self.tri;
+        let ends = |(t, k): (usize, usize)| (tri[t][(k + 1) % 3], tri[t][(k + 2) % 3]);
+        let sees = |e: (usize, usize)| {
+            let (u, w) = ends(e);
+            s.orient(u, w, p) < 0
+        };
+        let start = (t as usize, k);
+        let mut chain = vec![start];
+        let mut e = start;
+        while let Some(f) = self.hull_prev(e.0, e.1).filter(|&f| f != start && sees(f)) {
+            chain.push(f);
+            e = f;
+        }
+        chain.reverse();
+        let mut e = start;
+        while let Some(f) = self
+            .hull_next(e.0, e.1)
+            .filter(|&f| !chain.contains(&f) && sees(f))
+        {
+            chain.push(f);
+            e = f;
+        }
+        if chain.len() > self.tri.len() {
+            return Err(Rebuild);
+        }
+        let chain: Vec<(usize, usize, u32, u32)> = chain
+            .into_iter()
+            .map(|(t, k)| {
+                let (u, w) = ends((t, k));
+                (t, k, u, w)
+            })
+            .collect();
+        let first = self.tri.len() as u32;
+        for (n, &(t, k, u, w)) in chain.iter().enumerate() {
+            let id = first + n as u32;
+            let prev = if n == 0 { NONE } else { id - 1 };
+            let next = if n + 1 == chain.len() { NONE } else { id + 1 };
+            // Opposite w: u → p (shared with the previous new triangle); opposite u:
+            // p → w (with the next); opposite p: the old hull edge.
+            self.push([w, u, p], [prev, next, t as u32]);
+            self.nbr[t][k] = id;
+        }
+        Ok(())
+    }
+
+    /// Appends a triangle.
+    fn push(&mut self, tri: [u32; 3], nbr: [u32; 3]) {
+        self.tri.push(tri);
+        self.nbr.push(nbr);
+        self.alive.push(true);
+        self.touch(self.tri.len() as u32 - 1);
+    }
+
+    /// The neighbour across the edge opposite vertex `i` of `t`: its slot `j` for that edge
+    /// and its vertex `d` there, if any.
+    fn across(&self, t: usize, i: usize) -> Option<(usize, u32)> {
+        let u = self.nbr[t][i];
+        if u == NONE {
+            return None;
+        }
+        let v = self.tri[t];
+        let uv = self.tri[u as usize];
+        let j = (0..3)
+            .find(|&j| uv[(j + 1) % 3] == v[(i + 2) % 3] && uv[(j + 2) % 3] == v[(i + 1) % 3])?;
+        Some((j, uv[j]))
+    }
+
+    /// Replaces `old` by `new` in `t`'s neighbour list.
+    fn relink(&mut self, t: u32, old: u32, new: u32) {
+        if t == NONE {
+            return;
+        }
+        for s in &mut self.nbr[t as usize] {
+            if *s == old {
+                *s = new;
+                return;
+            }
+        }
+    }
+
+    /// Flips the edge opposite vertex `i` of `t`. Returns the two new triangles (same ids).
+    fn flip(&mut self, t: u32, i: usize) -> Option<(u32, u32)> {
+        let u = self.nbr[t as usize][i];
+        if u == NONE {
+            return None;
+        }
+        let tv = self.tri[t as usize];
+        let (a, b, c) = (tv[i], tv[(i + 1) % 3], tv[(i + 2) % 3]);
+        let uv = self.tri[u as usize];
+        let j = (0..3).find(|&j| uv[(j + 1) % 3] == c && uv[(j + 2) % 3] == b)?;
+        let d = uv[j];
+        let nt_b = self.nbr[t as usize][(i + 1) % 3]; // across c→a
+        let nt_c = self.nbr[t as usize][(i + 2) % 3]; // across a→b
+        let nu_c = self.nbr[u as usize][(j + 1) % 3]; // across b→d
+        let nu_b = self.nbr[u as usize][(j + 2) % 3]; // across d→c
+        self.tri[t as usize] = [a, b, d];
+        self.nbr[t as usize] = [nu_c, u, nt_c];
+        self.tri[u as usize] = [a, d, c];
+        self.nbr[u as usize] = [nu_b, nt_b, t];
+        self.relink(nu_c, u, t);
+        self.relink(nt_b, t, u);
+        self.touch(t);
+        self.touch(u);
+        Some((t, u))
+    }
+
+    /// Removes exactly degenerate triangles (collinear sites the `f64` positions showed as a
+    /// sliver): flips the long edge into the neighbour behind it, or drops a sliver whose
+    /// long edge is on the hull.
+    fn remove_slivers(&mut self, s: &Store) -> Option<()> {
+        let mut budget = 4 * self.tri.len() + 16;
+        let mut stack: Vec<u32> = (0..self.tri.len() as u32).collect();
+        while let Some(t) = stack.pop() {
+            if !self.alive[t as usize] {
+                continue;
+            }
+            let v = self.tri[t as usize];
+            match s.orient(v[0], v[1], v[2]) {
+                1 => continue,
+                -1 => return None,
+                _ => {}
+            }
+            budget = budget.checked_sub(1)?;
+            // The middle vertex is opposite the longest edge.
+            let l2 = |i: usize| {
+                let (p, q) = (
+                    s.zz[v[(i + 1) % 3] as usize].0,
+                    s.zz[v[(i + 2) % 3] as usize].0,
+                );
+                ZZeta([p[0] - q[0], p[1] - q[1], p[2] - q[2], p[3] - q[3]]).norm2()
+            };
+            let i = (0..3).max_by(|&x, &y| l2(x).cmp(&l2(y)))?;
+            let u = self.nbr[t as usize][i];
+            if u == NONE {
+                self.alive[t as usize] = false;
+                for n in self.nbr[t as usize] {
+                    self.relink(n, t, NONE);
+                }
+                self.nbr[t as usize] = [NONE; 3];
+            } else {
+                let (t1, t2) = self.flip(t, i)?;
+                stack.push(t1);
+                stack.push(t2);
+            }
+        }
+        Some(())
+    }
+
+    /// Lawson's flips until every edge is exactly locally Delaunay; returns the flip count
+    /// and, per triangle slot, whether that edge's four sites are exactly cocircular.
+    fn lawson(&mut self, s: &Store) -> Option<(usize, Vec<[bool; 3]>)> {
+        let mut merge = vec![[false; 3]; self.tri.len()];
+        let mut stack: Vec<(u32, u8)> = Vec::new();
+        for t in 0..self.tri.len() as u32 {
+            if self.alive[t as usize] {
+                for i in 0..3u8 {
+                    if self.nbr[t as usize][i as usize] > t {
+                        stack.push((t, i));
+                    }
+                }
+            }
+        }
+        let mut flips = 0usize;
+        let budget = 8 * self.tri.len() + 64;
+        while let Some((t, i)) = stack.pop() {
+            let (t, i) = (t as usize, i as usize);
+            let u = self.nbr[t][i];
+            if u == NONE {
+                continue;
+            }
+            let v = self.tri[t];
+            let uv = self.tri[u as usize];
+            let Some(j) = (0..3).find(|&j| uv[(j + 1) % 3] == v[(i + 2) % 3]) else {
+                continue;
+            };
+            let d = uv[j];
+            let (a, b, c) = (v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
+            let sign = s.incircle(v[0], v[1], v[2], d);
+            merge[t][i] = sign == 0;
+            merge[u as usize][j] = sign == 0;
+            if sign <= 0 {
+                continue;
+            }
+            // Strictly inside the circle and on the far side: the quad is convex.
+            if s.orient(a, b, d) <= 0 || s.orient(a, d, c) <= 0 {
+                return None;
+            }
+            flips += 1;
+            if flips > budget {
+                return None;
+            }
+            let (t1, t2) = self.flip(t as u32, i)?;
+            merge[t1 as usize] = [false; 3];
+            merge[t2 as usize] = [false; 3];
+            // New triangles are [a, b, d] and [a, d, c]: recheck their outer edges.
+            stack.extend([(t1, 0), (t1, 2), (t2, 0), (t2, 1)]);
+        }
+        Some((flips, merge))
+    }
+
+    /// Lists the cells: triangles joined across exactly cocircular edges (`merge`), each
+    /// counter-clockwise from its smallest lattice point, as point indices.
+    fn cells(&self, s: &Store, flips: usize, merge: &[[bool; 3]]) -> Cells {
+        let pt = |v: u32| s.zz[v as usize];
+        let ext = |v: u32| s.ext[v as usize];
+        let n = self.tri.len();
+        let mut offsets = Vec::with_capacity(n + 1);
+        let mut vertices = Vec::with_capacity(n * 3);
+        offsets.push(0u32);
+        let mut seen = vec![false; n];
+        let mut stack = Vec::new();
+        let mut edges: Vec<(u32, u32)> = Vec::new();
+        for t0 in 0..n {
+            if seen[t0] || !self.alive[t0] {
+                continue;
+            }
+            if !merge[t0].contains(&true) {
+                seen[t0] = true;
+                let v = self.tri[t0];
+                let k = (0..3).min_by_key(|&k| pt(v[k])).unwrap_or(0);
+                vertices.extend([v[k], v[(k + 1) % 3], v[(k + 2) % 3]].map(ext));
+                offsets.push(vertices.len() as u32);
+                continue;
+            }
+            // Flood the cell, collecting its boundary edges a → b.
+            edges.clear();
+            stack.push(t0);
+            seen[t0] = true;
+            while let Some(t) = stack.pop() {
+                let v = self.tri[t];
+                for i in 0..3 {
+                    if merge[t][i] {
+                        let u = self.nbr[t][i] as usize;
+                        if u < n && !seen[u] {
+                            seen[u] = true;
+                            stack.push(u);
+                        }
+                    } else {
+                        edges.push((v[(i + 1) % 3], v[(i + 2) % 3]));
+                    }
+                }
+            }
+            edges.sort_unstable();
+            let Some(start) = edges.iter().map(|x| x.0).min_by_key(|&i| pt(i)) else {
+                continue;
+            };
+            let mut cur = start;
+            for _ in 0..edges.len() {
+                vertices.push(ext(cur));
+                match edges.binary_search_by_key(&cur, |x| x.0) {
+                    Ok(k) => cur = edges[k].1,
+                    Err(_) => break,
+                }
+                if cur == start {
+                    break;
+                }
+            }
+            offsets.push(vertices.len() as u32);
+        }
+        let mut hull = Vec::new();
+        for t in 0..n {
+            if self.alive[t] {
+                let v = self.tri[t];
+                for i in 0..3 {
+                    if self.nbr[t][i] == NONE {
+                        hull.push([v[(i + 1) % 3], v[(i + 2) % 3]]);
+                    }
+                }
+            }
+        }
+        hull.sort_by_key(|e| pt(e[0]));
+        let hull = hull.into_iter().map(|e| e.map(ext)).collect();
+        Cells::from_parts(offsets, vertices, hull, flips)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lattice::{incircle, orient};
+    use crate::sites::Quasicrystal;
+
+    /// The filtered predicates agree with the exact ones on every triangle and every
+    /// neighbour quadruple of real site sets, which are full of exact zeros.
+    #[test]
+    fn filtered_predicates_match_exact() {
+        for (w, h, n) in [(64, 48, 500), (1024, 1024, 3000), (3000, 7, 900)] {
+            let sites = Quasicrystal::new(w, h).unwrap().first(n);
+            let mut s = Store::default();
+            for (k, x) in sites.iter().enumerate() {
+                s.push(x.lattice, k as u32);
+            }
+            let z = |i: u32| s.zz[i as usize];
+            let mut zeros = [0usize; 2];
+            let mut next = 12345u64;
+            let mut rnd = |m: usize| {
+                next ^= next << 13;
+                next ^= next >> 7;
+                next ^= next << 17;
+                (next % m as u64) as u32
+            };
+            for a in 0..n as u32 {
+                // Four points near each other: `a` and three of its 8 nearest.
+                let pa = s.xy[a as usize];
+                let d2 = |i: &u32| {
+                    let p = s.xy[*i as usize];
+                    (p[0] - pa[0]).powi(2) + (p[1] - pa[1]).powi(2)
+                };
+                let mut near: Vec<u32> = (0..n as u32).collect();
+                near.sort_by(|x, y| d2(x).total_cmp(&d2(y)));
+                for _ in 0..10 {
+                    let [b, c, d] = [0; 3].map(|_| near[1 + rnd(8) as usize]);
+                    let o = s.orient(a, b, c);
+                    assert_eq!(o, orient(z(a), z(b), z(c)));
+                    let i = s.incircle(a, b, c, d);
+                    assert_eq!(i, incircle(z(a), z(b), z(c), z(d)));
+                    zeros[0] += (o == 0) as usize;
+                    zeros[1] += (i == 0) as usize;
+                }
+            }
+            assert!(zeros[1] > 100, "{zeros:?}: exact zeros must be exercised");
+        }
+    }
+}
