@@ -354,27 +354,30 @@ impl LiveCells {
         let mut steps = 0usize;
         // The three orientations of the point against `t`'s edges, or `Err(k)`: outside the
         // hull, beyond `t`'s hull edge opposite vertex `k`.
-        let side = loop {
+        // The edge the walk came in through is known: the point is strictly inside it.
+        let mut from = NONE;
+        let side = 'walk: loop {
             let v = m.tri[t];
-            let o = [
-                s.orient(v[1], v[2], p),
-                s.orient(v[2], v[0], p),
-                s.orient(v[0], v[1], p),
-            ];
-            match (0..3).find(|&k| o[k] < 0) {
-                Some(k) => {
-                    let u = m.nbr[t][k];
+            let mut o = [1; 3];
+            for k in 0..3 {
+                let u = m.nbr[t][k];
+                if u == from && u != NONE {
+                    continue;
+                }
+                o[k] = s.orient(v[(k + 1) % 3], v[(k + 2) % 3], p);
+                if o[k] < 0 {
                     if u == NONE {
-                        break Err(k);
+                        break 'walk Err(k);
                     }
-                    t = u as usize;
+                    (from, t) = (t as u32, u as usize);
                     steps += 1;
                     if steps > m.tri.len() + 8 {
                         return Err(Rebuild);
                     }
+                    continue 'walk;
                 }
-                None => break Ok(o),
             }
+            break Ok(o);
         };
         let mut stack: Vec<(u32, u8)> = Vec::new();
         // How many of the orientations are zero, and the slot of the first zero (or the
