@@ -615,10 +615,9 @@ impl Mesh {
         }
         chain.reverse();
         let mut e = start;
-        while let Some(f) = self
-            .hull_next(e.0, e.1)
-            .filter(|&f| !chain.contains(&f) && sees(f))
-        {
+        // The chain is contiguous: going forward it can only wrap into its first edge.
+        let first = chain[0];
+        while let Some(f) = self.hull_next(e.0, e.1).filter(|&f| f != first && sees(f)) {
             chain.push(f);
             e = f;
         }
@@ -632,9 +631,9 @@ impl Mesh {
                 (t, k, u, w)
             })
             .collect();
-        let first = self.tri.len() as u32;
+        let id0 = self.tri.len() as u32;
         for (n, &(t, k, u, w)) in chain.iter().enumerate() {
-            let id = first + n as u32;
+            let id = id0 + n as u32;
             let prev = if n == 0 { NONE } else { id - 1 };
             let next = if n + 1 == chain.len() { NONE } else { id + 1 };
             // Opposite w: u → p (shared with the previous new triangle); opposite u:
