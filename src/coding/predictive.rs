@@ -210,7 +210,8 @@ struct Predictor {
     cell: i64,
     gw: i64,
     gh: i64,
-    grid: Vec<Vec<u32>>,
+    /// Per cell, its samples' positions and indices (inline: no second lookup per candidate).
+    grid: Vec<Vec<([i64; 2], u32)>>,
 }
 
 impl Predictor {
@@ -238,7 +239,7 @@ impl Predictor {
         self.grid = vec![Vec::new(); (self.gw * self.gh) as usize];
         for i in 0..self.pos.len() {
             let k = self.cell_of(self.pos[i]);
-            self.grid[k].push(i as u32);
+            self.grid[k].push((self.pos[i], i as u32));
         }
     }
 
@@ -257,7 +258,7 @@ impl Predictor {
     fn push(&mut self, p: [i64; 2], v: &[i32], mag: u8) {
         self.mags.push(mag);
         let k = self.cell_of(p);
-        self.grid[k].push(self.pos.len() as u32);
+        self.grid[k].push((p, self.pos.len() as u32));
         self.pos.push(p);
         self.values.extend_from_slice(v);
     }
@@ -268,18 +269,26 @@ impl Predictor {
         if self.pos.is_empty() {
             return;
         }
-        let consider = |i: u32, best: &mut Vec<(i64, u32)>| {
-            let q = self.pos[i as usize];
-            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-            let e = (dx * dx + dy * dy, i);
-            if best.len() < NEIGHBOURS {
-                best.push(e);
-                best.sort_unstable();
-            } else if e < best[NEIGHBOURS - 1] {
-                best[NEIGHBOURS - 1] = e;
-                best.sort_unstable();
+        // The nearest so far, sorted by (squared distance, index), and how many were taken.
+        let mut top = [(i64::MAX, u32::MAX); NEIGHBOURS];
+        let mut found = 0usize;
+        let mut consider = |cell: &[([i64; 2], u32)]| {
+            for &(q, i) in cell {
+                let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+                let e = (dx * dx + dy * dy, i);
+                if e < top[NEIGHBOURS - 1] {
+                    let mut k = NEIGHBOURS - 1;
+                    while k > 0 && e < top[k - 1] {
+                        top[k] = top[k - 1];
+                        k -= 1;
+                    }
+                    top[k] = e;
+                    found += 1;
+                }
             }
+            (found, top[NEIGHBOURS - 1].0)
         };
+        let mut state = (0, i64::MAX);
         let (cx, cy) = self.cell_xy(p);
         let rmax = self.gw.max(self.gh);
         for r in 0..=rmax {
@@ -287,25 +296,23 @@ impl Predictor {
                 let row = (y * self.gw) as usize;
                 if y == cy - r || y == cy + r {
                     for x in (cx - r).max(0)..=(cx + r).min(self.gw - 1) {
-                        for &i in &self.grid[row + x as usize] {
-                            consider(i, best);
-                        }
+                        state = consider(&self.grid[row + x as usize]);
                     }
                 } else {
                     for x in [cx - r, cx + r] {
                         if (0..self.gw).contains(&x) {
-                            for &i in &self.grid[row + x as usize] {
-                                consider(i, best);
-                            }
+                            state = consider(&self.grid[row + x as usize]);
                         }
                     }
                 }
             }
             let reach = r * self.cell;
-            if best.len() == NEIGHBOURS && best[NEIGHBOURS - 1].0 < reach * reach {
-                return;
+            if state.0 >= NEIGHBOURS && state.1 < reach * reach {
+                break;
             }
         }
+        let taken = state.0.min(NEIGHBOURS);
+        best.extend(top.into_iter().take(taken));
     }
 }
 
