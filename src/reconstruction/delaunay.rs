@@ -26,8 +26,10 @@ const NONE: u32 = u32::MAX;
 #[derive(Clone, Debug, Default)]
 struct Store {
     zz: Vec<ZZeta>,
-    /// `(Re, Im)` in `f64` and a bound on the error of either.
+    /// `(Re, Im)` of the point in `f64` and a bound on the error of either.
     xy: Vec<[f64; 3]>,
+    /// The same for its star image `x*` ([`ZZeta::star`]).
+    st: Vec<[f64; 3]>,
     /// Internal id → point index.
     ext: Vec<u32>,
 }
@@ -44,14 +46,70 @@ fn fmax(a: f64, b: f64) -> f64 {
 
 const EPS: f64 = f64::EPSILON;
 
+/// `(Re, Im)` of `x` with a bound on their error: `to_f64` multiplies exact integers by
+/// cos/sin constants (|c| ≤ 1) and adds four terms, within 4ε·Σ|n_k|; doubled for margin.
+fn cached(x: ZZeta) -> [f64; 3] {
+    let (re, im) = x.to_f64();
+    let m: f64 = x.0.iter().map(|&n| n.unsigned_abs() as f64).sum();
+    [re, im, 8.0 * EPS * m]
+}
+
+/// The orientation determinant of cached points and a bound on its error.
+#[inline(always)]
+fn orient_f(pa: [f64; 3], pb: [f64; 3], pc: [f64; 3]) -> (f64, f64) {
+    let (px, py, qx, qy) = (pb[0] - pa[0], pb[1] - pa[1], pc[0] - pa[0], pc[1] - pa[1]);
+    let det = px * qy - py * qx;
+    // Each difference errs by ≤ h (both ends' error, and rounding), so each product by
+    // ≤ M·h + (M + h)·h; the two roundings of the products and the one of their
+    // difference add ≤ 3ε·M². Doubled for margin.
+    let mm = fmax(fmax(px.abs(), py.abs()), fmax(qx.abs(), qy.abs()));
+    let h = pa[2] + fmax(pb[2], pc[2]) + EPS * mm;
+    (
+        det,
+        2.0 * (4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * mm * mm),
+    )
+}
+
+/// The incircle determinant of cached points and a bound on its error.
+#[inline(always)]
+fn incircle_f(pa: [f64; 3], pb: [f64; 3], pc: [f64; 3], pd: [f64; 3]) -> (f64, f64) {
+    let (ax, ay) = (pa[0] - pd[0], pa[1] - pd[1]);
+    let (bx, by) = (pb[0] - pd[0], pb[1] - pd[1]);
+    let (cx, cy) = (pc[0] - pd[0], pc[1] - pd[1]);
+    let det = (ax * ax + ay * ay) * (bx * cy - cx * by) - (bx * bx + by * by) * (ax * cy - cx * ay)
+        + (cx * cx + cy * cy) * (ax * by - bx * ay);
+    // Minors (≤ 2M²) err as an orientation, lifts (≤ 2M²) by ≤ 4Mh + 2h² + 6εM²; three
+    // products of ≤ 4M⁴ and two sums add ≤ 24εM⁴ of rounding. Doubled for margin.
+    let mm = fmax(
+        fmax(fmax(ax.abs(), ay.abs()), fmax(bx.abs(), by.abs())),
+        fmax(cx.abs(), cy.abs()),
+    );
+    let h = pd[2] + fmax(fmax(pa[2], pb[2]), pc[2]) + EPS * mm;
+    let m2 = mm * mm;
+    let hm = 4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * m2;
+    let hw = hm + 3.0 * EPS * m2;
+    let bound = 2.0 * (3.0 * (2.0 * m2 * hm + (2.0 * m2 + hm) * hw) + 24.0 * EPS * m2 * m2);
+    (det, bound)
+}
+
+/// Whether a determinant known to be within `err` of `f`, whose star image's determinant is
+/// within `gerr` of `g`, is exactly zero by the norm argument.
+///
+/// Both determinants are `(sin 72°/2)·D` with `D ∈ Z[τ]` ([`crate::lattice::incircle`]), and
+/// the star images' is `(sin 72°/2)·σ(D)/τ` up to sign (σ: τ ↦ −1/τ; the `2·Re` column
+/// maps by σ, `Im/sin 72°` by σ then 1/τ, `|x|²` by σ). So `D·σ(D) = a² + ab − b²` for
+/// `D = a + bτ` is an integer of absolute value `(4τ/sin²72°)·|f|·|g|` ≈ 7.16·|f|·|g|, at
+/// least 1 unless `D = 0`: below 1 means zero. (8 for margin.)
+#[inline]
+fn norm_says_zero(f: f64, err: f64, g: f64, gerr: f64) -> bool {
+    8.0 * (f.abs() + err) * (g.abs() + gerr) < 1.0
+}
+
 impl Store {
     fn push(&mut self, x: ZZeta, ext: u32) -> u32 {
-        let (re, im) = x.to_f64();
-        // `to_f64` multiplies exact integers by cos/sin constants (|c| ≤ 1) and adds four
-        // terms: within 4ε·Σ|n_k|; doubled for margin.
-        let m: f64 = x.0.iter().map(|&n| n.unsigned_abs() as f64).sum();
         self.zz.push(x);
-        self.xy.push([re, im, 8.0 * EPS * m]);
+        self.xy.push(cached(x));
+        self.st.push(cached(x.star()));
         self.ext.push(ext);
         self.zz.len() as u32 - 1
     }
@@ -59,12 +117,14 @@ impl Store {
     fn reserve(&mut self, n: usize) {
         self.zz.reserve(n);
         self.xy.reserve(n);
+        self.st.reserve(n);
         self.ext.reserve(n);
     }
 
     fn pop(&mut self) {
         self.zz.pop();
         self.xy.pop();
+        self.st.pop();
         self.ext.pop();
     }
 
@@ -73,67 +133,42 @@ impl Store {
     }
 
     /// Exact orientation of `a, b, c` (as [`crate::lattice::orient`]): decided from the
-    /// cached positions unless they are within their error bound of collinear.
+    /// cached positions unless they are within their error bound of collinear, then from
+    /// the star images' ([`norm_says_zero`]), then exactly.
     #[inline]
     fn orient(&self, a: u32, b: u32, c: u32) -> i32 {
-        let (pa, pb, pc) = (
-            self.xy[a as usize],
-            self.xy[b as usize],
-            self.xy[c as usize],
-        );
-        let (px, py, qx, qy) = (pb[0] - pa[0], pb[1] - pa[1], pc[0] - pa[0], pc[1] - pa[1]);
-        let det = px * qy - py * qx;
-        // Each difference errs by ≤ h (both ends' error, and rounding), so each product by
-        // ≤ M·h + (M + h)·h; the two roundings of the products and the one of their
-        // difference add ≤ 3ε·M². Doubled for margin.
-        let mm = fmax(fmax(px.abs(), py.abs()), fmax(qx.abs(), qy.abs()));
-        let h = pa[2] + fmax(pb[2], pc[2]) + EPS * mm;
-        let bound = 2.0 * (4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * mm * mm);
+        let [a, b, c] = [a, b, c].map(|i| i as usize);
+        let (det, bound) = orient_f(self.xy[a], self.xy[b], self.xy[c]);
         if det > bound {
             1
         } else if det < -bound {
             -1
         } else {
-            let z = &self.zz;
-            orient_value(z[a as usize], z[b as usize], z[c as usize]).signum()
+            let (g, gb) = orient_f(self.st[a], self.st[b], self.st[c]);
+            if norm_says_zero(det, bound, g, gb) {
+                return 0;
+            }
+            orient_value(self.zz[a], self.zz[b], self.zz[c]).signum()
         }
     }
 
-    /// Exact incircle test of `d` against `a, b, c` (as [`crate::lattice::incircle`]):
-    /// decided from the cached positions unless they are within their error bound of
-    /// cocircular.
+    /// Exact incircle test of `d` against `a, b, c` (as [`crate::lattice::incircle`]), decided
+    /// like [`Store::orient`].
     #[inline]
     fn incircle(&self, a: u32, b: u32, c: u32, d: u32) -> i32 {
-        let (pa, pb, pc, pd) = (
-            self.xy[a as usize],
-            self.xy[b as usize],
-            self.xy[c as usize],
-            self.xy[d as usize],
-        );
-        let (ax, ay) = (pa[0] - pd[0], pa[1] - pd[1]);
-        let (bx, by) = (pb[0] - pd[0], pb[1] - pd[1]);
-        let (cx, cy) = (pc[0] - pd[0], pc[1] - pd[1]);
-        let det = (ax * ax + ay * ay) * (bx * cy - cx * by)
-            - (bx * bx + by * by) * (ax * cy - cx * ay)
-            + (cx * cx + cy * cy) * (ax * by - bx * ay);
-        // Minors (≤ 2M²) err as an orientation, lifts (≤ 2M²) by ≤ 4Mh + 2h² + 6εM²; three
-        // products of ≤ 4M⁴ and two sums add ≤ 24εM⁴ of rounding. Doubled for margin.
-        let mm = fmax(
-            fmax(fmax(ax.abs(), ay.abs()), fmax(bx.abs(), by.abs())),
-            fmax(cx.abs(), cy.abs()),
-        );
-        let h = pd[2] + fmax(fmax(pa[2], pb[2]), pc[2]) + EPS * mm;
-        let m2 = mm * mm;
-        let hm = 4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * m2;
-        let hw = hm + 3.0 * EPS * m2;
-        let bound = 2.0 * (3.0 * (2.0 * m2 * hm + (2.0 * m2 + hm) * hw) + 24.0 * EPS * m2 * m2);
+        let [a, b, c, d] = [a, b, c, d].map(|i| i as usize);
+        let (det, bound) = incircle_f(self.xy[a], self.xy[b], self.xy[c], self.xy[d]);
         if det > bound {
             1
         } else if det < -bound {
             -1
         } else {
+            let (g, gb) = incircle_f(self.st[a], self.st[b], self.st[c], self.st[d]);
+            if norm_says_zero(det, bound, g, gb) {
+                return 0;
+            }
             let z = &self.zz;
-            incircle_exact(z[a as usize], z[b as usize], z[c as usize], z[d as usize])
+            incircle_exact(z[a], z[b], z[c], z[d])
         }
     }
 }
@@ -880,6 +915,49 @@ mod tests {
     use super::*;
     use crate::lattice::{incircle, orient};
     use crate::sites::Quasicrystal;
+
+    /// The norm identity behind [`norm_says_zero`]: for `D = a + bτ`, the determinants of
+    /// the points and of their star images multiply to `(sin²72°/4τ)·|a² + ab − b²|`.
+    #[test]
+    fn star_determinants_multiply_to_the_norm() {
+        use crate::lattice::{incircle_value, orient_value, SIN72, TAU};
+        let mut next = 99u64;
+        let mut rnd = || {
+            next ^= next << 13;
+            next ^= next >> 7;
+            next ^= next << 17;
+            (next % 13) as i64 - 6
+        };
+        let k = 4.0 * TAU / (SIN72 * SIN72);
+        let norm = |d: crate::lattice::ZTau| (d.a * d.a + d.a * d.b - d.b * d.b).abs() as f64;
+        let mut nonzero = 0;
+        for _ in 0..5000 {
+            let p: Vec<ZZeta> = (0..4)
+                .map(|_| ZZeta::new([rnd(), rnd(), rnd(), rnd()]))
+                .collect();
+            let (x, y) = (
+                p.iter().map(|&q| cached(q)),
+                p.iter().map(|&q| cached(q.star())),
+            );
+            let (x, y): (Vec<_>, Vec<_>) = (x.collect(), y.collect());
+            let (f, _) = orient_f(x[0], x[1], x[2]);
+            let (g, _) = orient_f(y[0], y[1], y[2]);
+            let n = norm(orient_value(p[0], p[1], p[2]));
+            assert!(
+                (k * (f * g).abs() - n).abs() < 1e-6 * (1.0 + n),
+                "orient {n}"
+            );
+            let (f, _) = incircle_f(x[0], x[1], x[2], x[3]);
+            let (g, _) = incircle_f(y[0], y[1], y[2], y[3]);
+            let n = norm(incircle_value(p[0], p[1], p[2], p[3]));
+            assert!(
+                (k * (f * g).abs() - n).abs() < 1e-6 * (1.0 + n),
+                "incircle {n}"
+            );
+            nonzero += (n > 0.0) as usize;
+        }
+        assert!(nonzero > 4000);
+    }
 
     /// The filtered predicates agree with the exact ones on every triangle and every
     /// neighbour quadruple of real site sets, which are full of exact zeros.
