@@ -249,8 +249,6 @@ const SEED: usize = 64;
 #[derive(Clone, Debug)]
 pub(crate) struct LiveCells {
     store: Store,
-    /// Point index → internal id (`NONE`: not a vertex, e.g. a repeated position).
-    int_of: Vec<u32>,
     mesh: Mesh,
     /// Per triangle slot: whether the edge opposite vertex `i` joins two cocircular triangles.
     merge: Vec<[bool; 3]>,
@@ -265,6 +263,7 @@ impl LiveCells {
     /// From any Delaunay triangulation of `lattice[0..n]` (`mesh` vertices index `lattice`).
     pub(crate) fn build(mesh: &Triangulation, lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
         let mut store = Store::default();
+        // Point index → internal id.
         let mut int_of = vec![NONE; lattice.len()];
         for v in mesh.vertices() {
             let i = v.data().index;
@@ -282,7 +281,6 @@ impl LiveCells {
         let locator = Locator::new(&store);
         Some(LiveCells {
             store,
-            int_of,
             mesh: m,
             merge,
             flips,
@@ -314,8 +312,6 @@ impl LiveCells {
         let new = lattice.len().saturating_sub(self.points);
         let mut touched = Vec::with_capacity(8 * new);
         let mut round: Vec<u64> = Vec::new();
-        self.int_of
-            .resize(lattice.len().max(self.int_of.len()), NONE);
         self.store.reserve(new);
         self.mesh.reserve(2 * new);
         self.mesh.vtri.reserve(new);
@@ -500,7 +496,6 @@ impl LiveCells {
                 return if same { Ok(()) } else { Err(Rebuild) };
             }
         }
-        self.int_of[i as usize] = p;
         self.locator.buckets[b] = p;
         // Lawson flips around the new point.
         let budget = 8 * m.tri.len() + 64;
