@@ -3,10 +3,8 @@
 //!
 //! * `gouraud_plain`: samples pushed without exact points (spade's own split);
 //! * `gouraud_cells`: samples pushed with exact points, cells already computed (one-shot
-//!   decode renders once, so add `cells_build` for its cost);
-//! * `cells_build`: the canonical cells from the kept triangulation (what a streaming render
-//!   recomputes after new samples arrived).
-//!
+//!   decode renders once, so add `incremental` below for its cost);
+//! * `cells_build`: the canonical cells from spade's kept triangulation (`Cells::build`).
 //!
 //! Group `exact_cells` (16k, 65k, 262k sites on 1024², samples and mirror points) times how
 //! the canonical cells are made, from the points alone: `spade_bulk_load` (spade's
