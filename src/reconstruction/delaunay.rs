@@ -595,29 +595,16 @@ impl Mesh {
         }
     }
 
-    /// The hull edge after the hull edge opposite vertex `k` of `t` (counter-clockwise
-    /// around the hull), as (triangle, slot): found by turning around their shared vertex.
-    fn hull_next(&self, mut t: usize, k: usize) -> Option<(usize, usize)> {
-        let b = self.tri[t][(k + 2) % 3];
+    /// The hull edge next to the hull edge opposite vertex `k` of `t`, counter-clockwise
+    /// around the hull (`forward`) or clockwise, as (triangle, slot): found by turning
+    /// around their shared vertex (the edge's end `b`, or its start `a`). The edge leaving
+    /// `b` is opposite the vertex before `b`; the edge arriving at `a`, the vertex after `a`.
+    fn hull_next(&self, mut t: usize, k: usize, forward: bool) -> Option<(usize, usize)> {
+        let s = if forward { 2 } else { 1 };
+        let pivot = self.tri[t][(k + s) % 3];
         for _ in 0..self.tri.len() {
-            let ib = self.tri[t].iter().position(|&v| v == b)?;
-            // The edge leaving b is opposite the vertex before b.
-            let slot = (ib + 2) % 3;
-            match self.nbr[t][slot] {
-                NONE => return Some((t, slot)),
-                u => t = u as usize,
-            }
-        }
-        None
-    }
-
-    /// The hull edge before the hull edge opposite vertex `k` of `t`.
-    fn hull_prev(&self, mut t: usize, k: usize) -> Option<(usize, usize)> {
-        let a = self.tri[t][(k + 1) % 3];
-        for _ in 0..self.tri.len() {
-            let ia = self.tri[t].iter().position(|&v| v == a)?;
-            // The edge arriving at a is opposite the vertex after a.
-            let slot = (ia + 1) % 3;
+            let i = self.tri[t].iter().position(|&v| v == pivot)?;
+            let slot = (i + s) % 3;
             match self.nbr[t][slot] {
                 NONE => return Some((t, slot)),
                 u => t = u as usize,
@@ -639,7 +626,10 @@ impl Mesh {
         let start = (t as usize, k);
         let mut chain = vec![start];
         let mut e = start;
-        while let Some(f) = self.hull_prev(e.0, e.1).filter(|&f| f != start && sees(f)) {
+        while let Some(f) = self
+            .hull_next(e.0, e.1, false)
+            .filter(|&f| f != start && sees(f))
+        {
             chain.push(f);
             e = f;
         }
@@ -647,7 +637,10 @@ impl Mesh {
         let mut e = start;
         // The chain is contiguous: going forward it can only wrap into its first edge.
         let first = chain[0];
-        while let Some(f) = self.hull_next(e.0, e.1).filter(|&f| f != first && sees(f)) {
+        while let Some(f) = self
+            .hull_next(e.0, e.1, true)
+            .filter(|&f| f != first && sees(f))
+        {
             chain.push(f);
             e = f;
         }
@@ -910,6 +903,49 @@ mod tests {
     use super::*;
     use crate::lattice::{incircle, orient};
     use crate::sites::Quasicrystal;
+
+    /// Points on a hull edge, beyond a hull edge's line, and outside seeing a straight run
+    /// of collinear hull sites: the same cells as spade's triangulation repaired.
+    #[test]
+    fn hull_edge_and_outside_insertions() {
+        let z = |n: [i64; 4]| Some(ZZeta::new(n));
+        // 0, 4 and 4ζ; then 2, 1, 3 on the hull edge 0 → 4; 6 beyond it on its line;
+        // 2 + 3ζ³ below the real axis (outside, seeing the whole collinear run 0 … 6); 5ζ²
+        // on the other side.
+        let lattice = [
+            z([0, 0, 0, 0]),
+            z([4, 0, 0, 0]),
+            z([0, 4, 0, 0]),
+            z([2, 0, 0, 0]),
+            z([1, 0, 0, 0]),
+            z([3, 0, 0, 0]),
+            z([6, 0, 0, 0]),
+            z([2, 0, 0, 3]),
+            z([0, 0, 5, 0]),
+        ];
+        let positions: Vec<Point> = lattice
+            .iter()
+            .map(|x| {
+                let (re, im) = x.unwrap().to_f64();
+                [100.0 + 10.0 * re, 100.0 + 10.0 * im]
+            })
+            .collect();
+        let mut seed = Triangulation::new();
+        mesh::sync(&mut seed, &positions[..3], &mut 0);
+        let mut live = LiveCells::build(&seed, &lattice[..3]).unwrap();
+        for n in 4..=lattice.len() {
+            live.extend(&lattice[..n]).unwrap();
+            let mut all = Triangulation::new();
+            mesh::sync(&mut all, &positions[..n], &mut 0);
+            let sorted = |c: &Cells| {
+                let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();
+                v.sort();
+                (v, c.hull().to_vec())
+            };
+            let expected = LiveCells::build(&all, &lattice[..n]).unwrap().cells();
+            assert_eq!(sorted(&live.cells()), sorted(&expected), "{n} points");
+        }
+    }
 
     /// The norm identity behind [`norm_says_zero`]: for `D = a + bτ`, the determinants of
     /// the points and of their star images multiply to `(sin²72°/4τ)·|a² + ab − b²|`.
