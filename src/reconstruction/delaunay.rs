@@ -1,17 +1,19 @@
 //! The exact Delaunay triangulation of lattice points behind the canonical cells.
 //!
 //! Points are kept under compact internal ids, in the order they were inserted, with their
-//! exact point in Z\[ζ\] and its `f64` position: the predicates decide from the cached
-//! positions with a proven error bound and fall back to the exact ones of
-//! [`crate::lattice::incircle`] only near zero (which, in a quasicrystal full of cocircular
-//! sites, is every merged cell).
+//! exact point in Z\[ζ\] and the `f64` positions of the point and of its star image: the
+//! predicates decide from the cached positions with a proven error bound; near zero (every
+//! merged cell of a quasicrystal is an exact zero) the star images' determinant proves a
+//! zero by a norm argument ([`norm_says_zero`]), and only what neither decides goes to the
+//! exact predicates of [`crate::lattice::incircle`].
 //!
 //! A triangulation is started from `spade`'s (bulk loaded for a whole set, or for the first
 //! few points of a progressive one) and grown by local insertion: a new point splits the
 //! triangle (or the two triangles of the edge) it falls in, or is joined to the hull edges it
-//! sees from outside, and exact Lawson flips restore the Delaunay property around it. Points are inserted in rounds of doubling size, each round in
-//! Z-order, so that consecutive insertions are neighbours in the plane and in memory (the
-//! triangulation does not depend on the order, the cells built from it even less).
+//! sees from outside, and exact Lawson flips restore the Delaunay property around it. Points
+//! are inserted in rounds of doubling size, each round in Z-order, so that consecutive
+//! insertions are neighbours in the plane and in memory (the triangulation does not depend
+//! on the order, the cells built from it even less).
 
 use spade::Triangulation as _;
 
