@@ -426,11 +426,8 @@ impl LiveCells {
             None => {
                 let first = m.tri.len() as u32;
                 m.attach(s, t as u32, k, p)?;
-                let last = m.tri.len() as u32;
-                self.merge.resize(m.tri.len(), [false; 3]);
                 // Each new triangle is [w, u, p] on an old hull edge u → w.
-                stack.extend((first..last).map(|t| (t, 2)));
-                touched.extend(first..last);
+                stack.extend((first..m.tri.len() as u32).map(|t| (t, 2)));
             }
             Some(1) if m.nbr[t][k] == NONE => {
                 // On a hull edge (opposite vertex k of t): split t in two.
@@ -442,10 +439,7 @@ impl LiveCells {
                 m.push([a, p, c], [NONE, t_ca, t1]);
                 m.relink(t_ca, t1, t2);
                 m.touch(t1);
-                self.merge.resize(m.tri.len(), [false; 3]);
-                self.merge[t] = [false; 3];
                 stack.extend([(t1, 2), (t2, 1)]);
-                touched.extend([t1, t2]);
             }
             Some(0) => {
                 let [a, b, c] = m.tri[t];
@@ -458,10 +452,7 @@ impl LiveCells {
                 m.relink(nb, t1, t2);
                 m.relink(nc, t1, t3);
                 m.touch(t1);
-                self.merge.resize(m.tri.len(), [false; 3]);
-                self.merge[t] = [false; 3];
                 stack.extend([(t1, 2), (t2, 2), (t3, 2)]);
-                touched.extend([t1, t2, t3]);
             }
             Some(1) => {
                 // On the edge opposite vertex k of t: split t and its neighbour into four.
@@ -485,11 +476,7 @@ impl LiveCells {
                 m.relink(u_bd, u1, u2);
                 m.touch(t1);
                 m.touch(u1);
-                self.merge.resize(m.tri.len(), [false; 3]);
-                self.merge[t] = [false; 3];
-                self.merge[u] = [false; 3];
                 stack.extend([(t1, 2), (t2, 1), (u1, 2), (u2, 1)]);
-                touched.extend([t1, t2, u1, u2]);
             }
             Some(_) => {
                 // On a vertex: the same point again (the first is kept).
@@ -497,6 +484,13 @@ impl LiveCells {
                 self.store.pop();
                 return if same { Ok(()) } else { Err(Rebuild) };
             }
+        }
+        // The triangles made or rewritten (each on the stack with its edge facing away from
+        // the new point): no merge flag yet, cocircularity to be tested again.
+        self.merge.resize(m.tri.len(), [false; 3]);
+        for &(t, _) in &stack {
+            self.merge[t as usize] = [false; 3];
+            touched.push(t);
         }
         self.locator.buckets[b] = p;
         // Lawson flips around the new point.
