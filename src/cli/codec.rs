@@ -373,9 +373,9 @@ pub struct InfoArgs {
 pub fn info(a: InfoArgs) -> Result<()> {
     let bytes = read(&a.input)?;
     let ins = qcs::container::inspect(&bytes);
-    println!("file: {} ({} bytes)", a.input.display(), ins.file_len);
+    say!("file: {} ({} bytes)", a.input.display(), ins.file_len);
     if let Some(h) = &ins.header {
-        println!(
+        say!(
             "version {}, {}×{} {:?}, {} samples, first level {}",
             qcs::container::VERSION,
             h.width,
@@ -384,24 +384,29 @@ pub fn info(a: InfoArgs) -> Result<()> {
             h.total_samples,
             h.first_level
         );
-        println!("coding: {}", h.coding);
+        say!("coding: {}", h.coding);
         match h.lattice {
-            Some(l) => println!(
+            Some(l) => say!(
                 "lattice: root {} px, origin ({}, {}) px",
                 l.root_length as f64 / 65536.0,
                 l.origin_x as f64 / 65536.0,
                 l.origin_y as f64 / 65536.0
             ),
-            None => println!("lattice: default (1 px per root, origin at (-W/2, -H/3))"),
+            None => say!("lattice: default (1 px per root, origin at (-W/2, -H/3))"),
         }
-        println!(
+        say!(
             "header: {} bytes, check byte ok (level 0's CRC covers it too)",
             ins.header_len.unwrap_or(0)
         );
     }
-    println!(
+    say!(
         "{:>5} {:>5} {:>10} {:>19} {:>9} {:>9}  status",
-        "chunk", "tag", "offset", "samples", "payload", "present"
+        "chunk",
+        "tag",
+        "offset",
+        "samples",
+        "payload",
+        "present"
     );
     for c in &ins.chunks {
         let lvl = c.level.and_then(|k| ins.levels.get(k as usize));
@@ -414,7 +419,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
             qcs::container::ChunkStatus::Truncated => "truncated".to_string(),
             qcs::container::ChunkStatus::Bad(e) => format!("BAD: {e}"),
         };
-        println!(
+        say!(
             "{:>5} {:>5} {:>10} {:>19} {:>9} {:>9}  {}",
             c.chunk.index,
             qcs::container::chunk::tag_name(c.chunk.tag),
@@ -427,17 +432,19 @@ pub fn info(a: InfoArgs) -> Result<()> {
     }
     let missing = ins.levels.iter().filter(|l| l.chunk.is_none()).count();
     if missing > 0 {
-        println!("{missing} level(s) not in the file");
+        say!("{missing} level(s) not in the file");
     }
     for m in &ins.metadata {
         match m {
-            qcs::container::Metadata::Icc(p) => println!("ICC profile: {} bytes", p.len()),
-            qcs::container::Metadata::Text { key, value } => println!("text: {key} = {value}"),
+            qcs::container::Metadata::Icc(p) => say!("ICC profile: {} bytes", p.len()),
+            qcs::container::Metadata::Text { key, value } => say!("text: {key} = {value}"),
         }
     }
-    println!(
+    say!(
         "samples: {} available, {} verified; end: {:?}",
-        ins.samples_available, ins.samples_verified, ins.end
+        ins.samples_available,
+        ins.samples_verified,
+        ins.end
     );
     if let Some(e) = ins.error {
         return Err(e).with_context(|| format!("{} is damaged", a.input.display()));
@@ -479,15 +486,18 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
     let (w, h) = reference.dimensions();
     let mut strip = image::RgbImage::new(w * 4, h);
     if !quiet {
-        println!(
+        say!(
             "{}: {} bytes ({} samples)",
             qcs_path.display(),
             bytes.len(),
             opts.sample_count(w, h)
         );
-        println!(
+        say!(
             "{:>7} {:>8} {:>8} {:>8}  file",
-            "share", "bytes", "samples", "PSNR dB"
+            "share",
+            "bytes",
+            "samples",
+            "PSNR dB"
         );
     }
     for (i, pct) in [1usize, 5, 25, 100].into_iter().enumerate() {
@@ -505,7 +515,7 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
             .with_context(|| format!("cannot write {}", path.display()))?;
         image::imageops::replace(&mut strip, &rgb, (i as u32 * w) as i64, 0);
         if !quiet {
-            println!(
+            say!(
                 "{:>6}% {:>8} {:>8} {:>8.2}  {}",
                 pct,
                 cut,
@@ -520,7 +530,7 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
         .save(&path)
         .with_context(|| format!("cannot write {}", path.display()))?;
     if !quiet {
-        println!("side by side: {}", path.display());
+        say!("side by side: {}", path.display());
     }
     Ok(())
 }

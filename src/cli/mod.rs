@@ -1,5 +1,14 @@
 //! Command-line definitions (clap) and dispatch; one module per subcommand.
 
+/// `println!` that returns stdout's error (e.g. a pipe closed by `head`) instead of
+/// panicking; [`main`] ends quietly on a closed pipe.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout(), $($arg)*)?
+    }};
+}
+
 mod codec;
 mod render;
 mod sites;
@@ -56,6 +65,14 @@ pub enum Command {
     Demo(codec::DemoArgs),
 }
 
+/// Whether `e` is stdout's reader having closed the pipe.
+fn closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
 /// Exit codes: 0 success, 1 I/O or other failure, 2 usage (clap), 3 malformed input, 4 limit exceeded.
 fn exit_code(e: &anyhow::Error) -> u8 {
     for cause in e.chain() {
@@ -89,6 +106,8 @@ pub fn main() -> ExitCode {
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader went away (`qcs sites … | head`): nothing more to say, as for `yes`.
+        Err(e) if closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("qcs: error: {e:#}");
             ExitCode::from(exit_code(&e))

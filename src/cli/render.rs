@@ -246,9 +246,9 @@ pub fn eval(a: EvalArgs, quiet: bool) -> Result<()> {
                 Some(false) => "does not hold",
                 None => "not checked",
             };
-            println!("{v:>14}: {} ({})", c.statement, c.evidence);
+            say!("{v:>14}: {} ({})", c.statement, c.evidence);
         }
-        println!("report: {}", a.out.join("index.html").display());
+        say!("report: {}", a.out.join("index.html").display());
     }
     Ok(())
 }

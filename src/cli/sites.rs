@@ -38,6 +38,7 @@ pub fn run(a: SitesArgs) -> Result<()> {
                 s.pos[0], s.pos[1]
             )?;
         }
+        out.flush()?;
         return Ok(());
     }
     let Some(sampler) = super::sampler_by_name(&a.sampler, a.seed) else {
@@ -50,5 +51,6 @@ pub fn run(a: SitesArgs) -> Result<()> {
     for (i, p) in sampler.sites(a.width, a.height, a.count).iter().enumerate() {
         writeln!(out, "{i},{:.6},{:.6}", p[0], p[1])?;
     }
+    out.flush()?;
     Ok(())
 }
