@@ -1,7 +1,8 @@
 //! Rendering cost at 1 Mpixel (1024 × 1024), single-threaded, against JPEG decoding.
 //!
 //! `decode_1mpx` times the whole one-shot `qcs::decode` of a `.qcs` file of the photograph
-//! (default coding, 16k / 65k / 262k samples) on a one-thread pool, and `image` decoding a
+//! (default coding, 16k / 65k / 262k samples) on a one-thread pool (and on two threads, where
+//! the cells are built while the colours decode and the bands render in parallel), and `image` decoding a
 //! baseline and a progressive JPEG of the same photograph with the quality whose file size is
 //! nearest to the `.qcs` file's (sizes printed).
 //!
@@ -161,6 +162,10 @@ fn bench(c: &mut Criterion) {
         .num_threads(1)
         .build()
         .expect("a one-thread pool");
+    let two_cores = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("a two-thread pool");
     let mut dec = c.benchmark_group("decode_1mpx");
     dec.sample_size(10);
     dec.throughput(Throughput::Elements(pixels));
@@ -172,13 +177,15 @@ fn bench(c: &mut Criterion) {
         };
         let file = qcs::encode(&photo, &opts).expect("qcs encode");
         eprintln!("qcs file for {n} samples: {} bytes", file.len());
-        dec.bench_function(BenchmarkId::new("qcs_one_core", n), |b| {
-            b.iter(|| {
-                one_core.install(|| {
-                    black_box(qcs::decode(&file, &Default::default()).map(|d| d.image.width()))
+        for (name, pool) in [("qcs_one_core", &one_core), ("qcs_two_cores", &two_cores)] {
+            dec.bench_function(BenchmarkId::new(name, n), |b| {
+                b.iter(|| {
+                    pool.install(|| {
+                        black_box(qcs::decode(&file, &Default::default()).map(|d| d.image.width()))
+                    })
                 })
-            })
-        });
+            });
+        }
         for progressive in [false, true] {
             let (jpeg, q) = jpeg_near(&img, file.len(), progressive);
             let name = if progressive {

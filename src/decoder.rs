@@ -5,7 +5,7 @@ use crate::coding::raw::RawUnpacker;
 use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
 };
-use crate::reconstruction::{Method, SampleSet};
+use crate::reconstruction::{CellSeed, Method, SampleSet};
 use crate::sites::{Frame, FrameError, Quasicrystal, Site};
 use crate::{Error, Limits, Result};
 use image::DynamicImage;
@@ -371,13 +371,15 @@ impl StreamDecoder {
         Ok(())
     }
 
-    /// Renders from the first `k` available samples only (a fresh set, not the kept one).
+    /// Renders from the first `k` available samples only (a fresh set, not the kept one),
+    /// extending `seed`, the cells of the first samples, if given.
     fn render_prefix(
         &mut self,
         k: u64,
         method: Method,
         width: u32,
         height: u32,
+        seed: Option<CellSeed>,
     ) -> Result<DecodedImage> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
@@ -387,6 +389,9 @@ impl StreamDecoder {
         let used = sites.len() as u64;
         for (k, s) in sites.iter().enumerate() {
             push_site(&mut set, s, &col[k * c..k * c + c]);
+        }
+        if let Some(seed) = seed {
+            set.seed_cells(seed);
         }
         let pixels = set.render(method, width, height);
         Ok(DecodedImage {
@@ -472,12 +477,43 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     let mut dec = StreamDecoder::with_options(
         ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover),
     );
-    dec.push(bytes)?;
+    let max_samples = opts.max_samples.unwrap_or(u64::MAX);
+    let (mut seed, mut done) = (None, 0);
+    if opts.method == Method::Gouraud && rayon::current_num_threads() > 1 {
+        // With a thread to spare, the cells of the samples that are surely there (those of
+        // the verified levels) are built while the colours decode: the cells depend only on
+        // the header. The header goes first, so that its limits hold before any work.
+        let head = Header::parse(bytes).map_or(0, |(_, len)| len);
+        dec.push(&bytes[..head])?;
+        done = head;
+        if let (Some(h), Some(seq)) = (dec.header().cloned(), dec.seq) {
+            let sure = crate::container::inspect(bytes)
+                .samples_verified
+                .min(max_samples)
+                .min(h.total_samples) as usize;
+            let mut set = dec.new_set(&h);
+            let blank = vec![0; dec.channels()];
+            let (pushed, built) = rayon::join(
+                || dec.push(&bytes[head..]),
+                move || {
+                    let sites = seq.first(sure);
+                    for s in &sites {
+                        push_site(&mut set, s, &blank);
+                    }
+                    (sites, set.into_seed())
+                },
+            );
+            pushed?;
+            done = bytes.len();
+            if dec.sites.len() < built.0.len() {
+                dec.sites = built.0;
+            }
+            seed = built.1;
+        }
+    }
+    dec.push(&bytes[done..])?;
     let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
     let (w, ht) = opts.size.unwrap_or((h.width, h.height));
-    let k = opts
-        .max_samples
-        .unwrap_or(u64::MAX)
-        .min(dec.samples_available());
-    dec.render_prefix(k, opts.method, w, ht)
+    let k = max_samples.min(dec.samples_available());
+    dec.render_prefix(k, opts.method, w, ht, seed)
 }

@@ -206,3 +206,50 @@ fn bundled_photo_meets_the_stated_floor() {
     let p = psnr(&img.to_rgb8(), &d.image.to_rgb8());
     assert!(p > 26.5, "rocket: {p:.2} dB");
 }
+
+/// A one-shot Gouraud decode on a pool with threads to spare builds the cells of the verified
+/// samples while the colours decode, then extends them: the picture must be the one the
+/// single-threaded decode gives, for whole files and prefixes (in the raw coding a prefix
+/// also has unverified samples beyond the verified ones), with and without a sample cap.
+#[test]
+fn parallel_one_shot_decode_equals_the_single_threaded_one() {
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("a pool")
+    };
+    let (one, two) = (pool(1), pool(2));
+    let img = photo("coffee-150x100.png");
+    for coding in [
+        qcs::container::Coding::Raw { bits: 8 },
+        EncodeOptions::default().coding,
+    ] {
+        let opts = EncodeOptions {
+            coding: coding.clone(),
+            ..Default::default()
+        };
+        let bytes = encode(&img, &opts).unwrap();
+        for cut in [0, 20, 150, 700, 1999, bytes.len() / 2, bytes.len()] {
+            for max_samples in [None, Some(400)] {
+                let opts = DecodeOptions {
+                    max_bytes: Some(cut),
+                    max_samples,
+                    ..Default::default()
+                };
+                let a = one.install(|| decode(&bytes, &opts));
+                let b = two.install(|| decode(&bytes, &opts));
+                match (a, b) {
+                    (Ok(a), Ok(b)) => {
+                        assert_eq!(a.samples_used, b.samples_used, "{coding} cut {cut}");
+                        assert!(a.image == b.image, "{coding} cut {cut} {max_samples:?}");
+                    }
+                    (a, b) => assert_eq!(
+                        a.err().map(|e| e.to_string()),
+                        b.err().map(|e| e.to_string())
+                    ),
+                }
+            }
+        }
+    }
+}
