@@ -98,4 +98,205 @@ fn closed_stdout_ends_quietly() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+
+    // `demo` prints its table only once every file is written: a closed pipe loses none.
+    let dir = scratch("demo-pipe");
+    let mut child = qcs()
+        .args(["demo", rocket])
+        .arg(&dir)
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("qcs runs");
+    drop(child.stdout.take());
+    assert!(child.wait().expect("qcs ends").success());
+    let files = std::fs::read_dir(&dir).expect("demo dir").count();
+    assert_eq!(files, 6, "rocket.qcs, four previews and the strip");
+}
+
+fn code(cmd: &mut Command) -> (Option<i32>, String) {
+    let out = run(cmd);
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn rocket_qcs(name: &str) -> PathBuf {
+    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let file = scratch(name);
+    assert!(run(qcs().args(["-q", "encode", rocket]).arg(&file))
+        .status
+        .success());
+    file
+}
+
+/// Sizes and counts beyond the default limits are refused with exit 4 before anything is
+/// allocated, in every subcommand that takes them.
+#[test]
+fn limits_hold_in_every_subcommand() {
+    let file = rocket_qcs("limits.qcs");
+    let out = scratch("limits.png");
+    for style in ["delaunay", "mosaic"] {
+        let (c, err) = code(qcs().arg("render").arg(&file).arg(&out).args([
+            "--style",
+            style,
+            "--size",
+            "100000x100000",
+        ]));
+        assert_eq!(c, Some(4), "{style}: {err}");
+    }
+    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let (c, err) = code(
+        qcs()
+            .arg("render")
+            .arg(rocket)
+            .arg(&out)
+            .args(["--samples", "100000000"]),
+    );
+    assert_eq!(c, Some(4), "{err}");
+    let (c, err) = code(qcs().args([
+        "sites",
+        "--width",
+        "9",
+        "--height",
+        "9",
+        "--count",
+        "100000000",
+    ]));
+    assert_eq!(c, Some(4), "{err}");
+}
+
+/// Nonsense numbers are usage errors (exit 2), not a silent one-sample file or exit 1.
+#[test]
+fn nonsense_numbers_are_usage_errors() {
+    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let file = rocket_qcs("numbers.qcs");
+    let out = scratch("numbers.png");
+    for bad in [["--density", "0"], ["--density", "nan"], ["--samples", "0"]] {
+        let (c, err) = code(
+            qcs()
+                .args(["encode", rocket])
+                .arg(scratch("n.qcs"))
+                .args(bad),
+        );
+        assert_eq!(c, Some(2), "{bad:?}: {err}");
+    }
+    for bad in [["--scale", "0"], ["--scale", "inf"], ["--every", "0"]] {
+        let mut cmd = qcs();
+        cmd.arg("decode").arg(&file).arg(&out).args(bad);
+        if bad[0] == "--every" {
+            cmd.arg("--frames").arg(scratch("frames-0"));
+        }
+        let (c, err) = code(&mut cmd);
+        assert_eq!(c, Some(2), "{bad:?}: {err}");
+    }
+    let (c, err) = code(
+        qcs()
+            .args(["sites", "--width", "9", "--height", "9", "--count", "3"])
+            .args(["--sampler", "bogus"]),
+    );
+    assert_eq!(c, Some(2), "{err}");
+}
+
+/// No command destroys or half-writes a file: the input is never the output, two inputs
+/// never share an output, a failed write leaves no file, a grey picture can be saved in a
+/// format without grey, and a format recognised by content needs no extension.
+#[test]
+fn files_are_written_whole_or_not_at_all() {
+    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let photo = scratch("photo.png");
+    std::fs::copy(rocket, &photo).expect("copy");
+    let before = std::fs::read(&photo).expect("read");
+    let (c, _) = code(qcs().arg("encode").arg(&photo).arg(&photo));
+    assert_eq!(c, Some(1));
+    assert_eq!(
+        std::fs::read(&photo).expect("read"),
+        before,
+        "the input survives"
+    );
+
+    let (a, b) = (scratch("a"), scratch("b"));
+    for d in [&a, &b] {
+        std::fs::create_dir_all(d).expect("dir");
+        std::fs::copy(rocket, d.join("x.png")).expect("copy");
+    }
+    let dir = scratch("out-dir");
+    let (c, err) = code(
+        qcs()
+            .arg("encode")
+            .arg(a.join("x.png"))
+            .arg(b.join("x.png"))
+            .arg("--out-dir")
+            .arg(&dir),
+    );
+    assert_eq!(c, Some(1), "{err}");
+    assert!(err.contains("would both be written"), "{err}");
+
+    // Content, not extension, says what an input is.
+    let bare = scratch("no-extension");
+    std::fs::copy(rocket, &bare).expect("copy");
+    assert!(run(qcs()
+        .args(["-q", "encode"])
+        .arg(&bare)
+        .arg(scratch("bare.qcs")))
+    .status
+    .success());
+
+    // A grey file decodes to GIF (widened to RGB); an unknown extension leaves no file.
+    let grey = scratch("grey.png");
+    image::GrayImage::from_pixel(30, 20, image::Luma([99]))
+        .save(&grey)
+        .expect("save");
+    let grey_qcs = scratch("grey.qcs");
+    assert!(run(qcs().args(["-q", "encode"]).arg(&grey).arg(&grey_qcs))
+        .status
+        .success());
+    let gif = scratch("grey.gif");
+    assert!(run(qcs().args(["-q", "decode"]).arg(&grey_qcs).arg(&gif))
+        .status
+        .success());
+    assert_eq!(image::open(&gif).expect("a GIF").width(), 30);
+    let odd = scratch("grey.xyz");
+    assert_ne!(
+        code(qcs().arg("decode").arg(&grey_qcs).arg(&odd)).0,
+        Some(0)
+    );
+    assert!(!odd.exists());
+
+    // A prefix without a whole header: an error, and no empty GIF left behind.
+    let cut = scratch("cut.qcs");
+    std::fs::write(&cut, &std::fs::read(&grey_qcs).expect("read")[..2]).expect("write");
+    let anim = scratch("cut.gif");
+    assert_eq!(code(qcs().arg("preview").arg(&cut).arg(&anim)).0, Some(3));
+    assert!(!anim.exists());
+}
+
+/// A library error is printed once, not once per level of its cause chain.
+#[test]
+fn errors_are_printed_once() {
+    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let (c, err) = code(qcs().arg("info").arg(rocket));
+    assert_eq!(c, Some(3));
+    let line = err.lines().next().unwrap_or_default();
+    assert_eq!(line.matches("bad magic byte").count(), 1, "{line}");
+}
+
+/// `decode --frames --bytes K` stops at K bytes, as a cut download would.
+#[test]
+fn frames_stop_at_the_byte_budget() {
+    let file = rocket_qcs("frames.qcs");
+    let dir = scratch("frames-budget");
+    let ok = run(qcs()
+        .args(["-q", "decode"])
+        .arg(&file)
+        .arg("--frames")
+        .arg(&dir)
+        .args(["--bytes", "600"]));
+    assert!(ok.status.success(), "{ok:?}");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .expect("frames")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.is_empty());
+    assert!(names.iter().all(|n| n.contains("preview")), "{names:?}");
 }

@@ -46,10 +46,10 @@ pub struct EncodeArgs {
     #[arg(long)]
     pub out_dir: Option<PathBuf>,
     /// Total number of samples.
-    #[arg(long, conflicts_with = "density")]
+    #[arg(long, conflicts_with = "density", value_parser = clap::value_parser!(u64).range(1..))]
     pub samples: Option<u64>,
     /// Samples per pixel (default 0.25).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_density)]
     pub density: Option<f64>,
     /// Raw coding (coding 0) at this many bits per channel, 1–8, instead of the predictive coding.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8), conflicts_with_all = ["quality", "lossless"])]
@@ -67,6 +67,15 @@ pub struct EncodeArgs {
     /// Text comment to store.
     #[arg(long)]
     pub comment: Option<String>,
+}
+
+fn parse_density(s: &str) -> Result<f64, String> {
+    let d: f64 = s.parse().map_err(|_| format!("not a number: {s:?}"))?;
+    if d > 0.0 && d <= 1.0 {
+        Ok(d)
+    } else {
+        Err(format!("{s} is not in (0, 1] samples per pixel"))
+    }
 }
 
 impl EncodeArgs {
@@ -102,8 +111,12 @@ impl EncodeArgs {
 }
 
 fn encode_file(input: &Path, output: &Path, opts: &EncodeOptions) -> Result<(u64, u64)> {
-    let img =
-        image::open(input).with_context(|| format!("cannot read image {}", input.display()))?;
+    let img = super::open_image(input)?;
+    // A file `qcs decode` would refuse (default limits) is not worth writing.
+    qcs::Limits::default()
+        .check_image(img.width() as u64, img.height() as u64)
+        .map_err(qcs::Error::from)
+        .with_context(|| format!("cannot encode {}", input.display()))?;
     let bytes =
         qcs::encode(&img, opts).with_context(|| format!("cannot encode {}", input.display()))?;
     std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
@@ -111,6 +124,22 @@ fn encode_file(input: &Path, output: &Path, opts: &EncodeOptions) -> Result<(u64
         std::fs::metadata(input).map(|m| m.len()).unwrap_or(0),
         bytes.len() as u64,
     ))
+}
+
+fn out_path(dir: &Path, input: &Path) -> PathBuf {
+    let stem = input
+        .file_stem()
+        .map(|s| s.to_os_string())
+        .unwrap_or_default();
+    dir.join(stem).with_extension("qcs")
+}
+
+/// Whether `a` and `b` name the same existing file.
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
 }
 
 fn is_image(p: &Path) -> bool {
@@ -128,6 +157,12 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
         if a.paths.len() != 2 {
             bail!(
                 "give one input and one output (IN OUT.qcs), or use --out-dir DIR for many inputs"
+            );
+        }
+        if same_file(&a.paths[0], &a.paths[1]) {
+            bail!(
+                "the output {} is the input image: give an output such as OUT.qcs",
+                a.paths[1].display()
             );
         }
         let (i, o) = encode_file(&a.paths[0], &a.paths[1], &opts)?;
@@ -157,6 +192,18 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
             inputs.push(p.clone());
         }
     }
+    let mut seen = std::collections::HashMap::new();
+    for p in &inputs {
+        let out = out_path(dir, p);
+        if let Some(prev) = seen.insert(out.clone(), p.clone()) {
+            bail!(
+                "{} and {} would both be written to {}",
+                prev.display(),
+                p.display(),
+                out.display()
+            );
+        }
+    }
     let start = Instant::now();
     let bar = if quiet {
         ProgressBar::hidden()
@@ -169,9 +216,7 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
     let results: Vec<Result<(u64, u64)>> = inputs
         .par_iter()
         .map(|p| {
-            let stem = p.file_stem().map(|s| s.to_os_string()).unwrap_or_default();
-            let out = dir.join(stem).with_extension("qcs");
-            let r = encode_file(p, &out, &opts);
+            let r = encode_file(p, &out_path(dir, p), &opts);
             bar.inc(1);
             r
         })
@@ -222,34 +267,30 @@ pub struct DecodeArgs {
     #[arg(long, value_parser = super::parse_size, conflicts_with = "scale")]
     pub size: Option<(u32, u32)>,
     /// Output scale factor.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_scale)]
     pub scale: Option<f64>,
     /// Use at most N samples.
-    #[arg(long, conflicts_with = "bytes")]
+    #[arg(long, conflicts_with_all = ["bytes", "frames"])]
     pub samples: Option<u64>,
     /// Use only the first K bytes of the file, as a cut download would.
     #[arg(long)]
     pub bytes: Option<usize>,
-    /// Write a preview PNG into DIR every --every bytes (default: at each level).
+    /// Write a preview PNG into DIR every --every bytes (default: at each level), up to
+    /// --bytes if given.
     #[arg(long)]
     pub frames: Option<PathBuf>,
     /// With --frames: bytes between previews.
-    #[arg(long, requires = "frames")]
+    #[arg(long, requires = "frames", value_parser = super::parse_count)]
     pub every: Option<usize>,
     /// Return the longest verified prefix of a damaged file instead of failing.
     #[arg(long)]
     pub recover: bool,
 }
 
-fn output_size(size: Option<(u32, u32)>, scale: Option<f64>, w: u32, h: u32) -> Result<(u32, u32)> {
-    if let Some(s) = size {
-        return Ok(s);
-    }
+fn output_size(size: Option<(u32, u32)>, scale: Option<f64>, w: u32, h: u32) -> (u32, u32) {
+    // `--scale` is finite and above 0 (clap checks it).
     let f = scale.unwrap_or(1.0);
-    if !(f > 0.0 && f.is_finite()) {
-        bail!("--scale must be positive");
-    }
-    Ok((
+    size.unwrap_or((
         ((w as f64 * f).round() as u32).max(1),
         ((h as f64 * f).round() as u32).max(1),
     ))
@@ -271,6 +312,8 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
     let Some(out) = &a.output else {
         bail!("give an output image path (or --frames DIR)")
     };
+    // An output the image crate cannot write is refused before the decode.
+    super::output_format(out)?;
     let header = {
         let mut d = StreamDecoder::new(qcs::Limits::default());
         d.push(&bytes[..bytes.len().min(qcs::container::MAX_HEADER_LEN)])
@@ -280,7 +323,7 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             .ok_or(qcs::Error::NeedMoreData)
             .with_context(ctx)?
     };
-    let size = output_size(a.size, a.scale, header.width, header.height)?;
+    let size = output_size(a.size, a.scale, header.width, header.height);
     let opts = DecodeOptions {
         method: a.method.into(),
         size: Some(size),
@@ -290,9 +333,7 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
         ..Default::default()
     };
     let d = qcs::decode(&bytes, &opts).with_context(ctx)?;
-    d.image
-        .save(out)
-        .with_context(|| format!("cannot write {}", out.display()))?;
+    super::save_image(&d.image, out)?;
     if !quiet {
         eprintln!(
             "{}: {}×{} from {} samples ({} verified, {} levels){}",
@@ -309,16 +350,16 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
 }
 
 fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
+    let bytes = &bytes[..a.bytes.unwrap_or(usize::MAX).min(bytes.len())];
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut dec = StreamDecoder::with_options(
         qcs::container::ParserOptions::with_limits(qcs::Limits::default()).recover(a.recover),
     );
     let mut cuts: Vec<usize> = match a.every {
-        Some(k) if k > 0 => (1..)
+        Some(k) => (1..)
             .map(|i| i * k)
             .take_while(|&c| c < bytes.len())
             .collect(),
-        Some(_) => bail!("--every must be positive"),
         None => level_ends(bytes),
     };
     cuts.push(bytes.len());
@@ -331,18 +372,18 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
         let Some(h) = dec.header().cloned() else {
             continue;
         };
-        let size = output_size(a.size, a.scale, h.width, h.height)?;
+        let size = output_size(a.size, a.scale, h.width, h.height);
         let pic = dec.render(a.method.into(), size.0, size.1)?;
         let kind = if pic.is_final() { "final" } else { "preview" };
         let path = dir.join(format!("frame-{n:03}-{cut:08}B-{kind}.png"));
-        pic.decoded()
-            .image
-            .save(&path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        super::save_image(&pic.decoded().image, &path)?;
         if !quiet {
             eprintln!("{}: {} samples", path.display(), pic.decoded().samples_used);
         }
         n += 1;
+    }
+    if n == 0 {
+        return Err(qcs::Error::NeedMoreData.into());
     }
     Ok(())
 }
@@ -464,10 +505,18 @@ pub struct DemoArgs {
 }
 
 pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
+    let img = super::open_image(&a.input)?;
     std::fs::create_dir_all(&a.out_dir)
         .with_context(|| format!("cannot create {}", a.out_dir.display()))?;
-    let img = image::open(&a.input)
-        .with_context(|| format!("cannot read image {}", a.input.display()))?;
+    // The table goes to stdout only once every file is written: a reader that closes the
+    // pipe early (`| head -1`) must not cut the work short.
+    let mut report = String::new();
+    macro_rules! note {
+        ($($arg:tt)*) => {{
+            use std::fmt::Write as _;
+            writeln!(report, $($arg)*).expect("writing to a String");
+        }};
+    }
     let opts = EncodeOptions {
         samples: a.samples,
         ..Default::default()
@@ -486,13 +535,13 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
     let (w, h) = reference.dimensions();
     let mut strip = image::RgbImage::new(w * 4, h);
     if !quiet {
-        say!(
+        note!(
             "{}: {} bytes ({} samples)",
             qcs_path.display(),
             bytes.len(),
             opts.sample_count(w, h)
         );
-        say!(
+        note!(
             "{:>7} {:>8} {:>8} {:>8}  file",
             "share",
             "bytes",
@@ -515,7 +564,7 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
             .with_context(|| format!("cannot write {}", path.display()))?;
         image::imageops::replace(&mut strip, &rgb, (i as u32 * w) as i64, 0);
         if !quiet {
-            say!(
+            note!(
                 "{:>6}% {:>8} {:>8} {:>8.2}  {}",
                 pct,
                 cut,
@@ -530,8 +579,10 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
         .save(&path)
         .with_context(|| format!("cannot write {}", path.display()))?;
     if !quiet {
-        say!("side by side: {}", path.display());
+        note!("side by side: {}", path.display());
     }
+    use std::io::Write as _;
+    std::io::stdout().write_all(report.as_bytes())?;
     Ok(())
 }
 
@@ -542,7 +593,7 @@ pub struct PreviewArgs {
     /// The animated GIF to write.
     pub output: PathBuf,
     /// Bytes between frames (default: one frame per level).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_count)]
     pub every: Option<usize>,
     /// Frame size WxH (default: the image's size, at most 512 px wide).
     #[arg(long, value_parser = super::parse_size)]
@@ -614,7 +665,6 @@ pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
     let bytes = read(&a.input)?;
     let ctx = || format!("cannot decode {}", a.input.display());
     let mut cuts: Vec<usize> = match a.every {
-        Some(0) => bail!("--every must be positive"),
         Some(k) => (1..)
             .map(|i| i * k)
             .take_while(|&c| c < bytes.len())
@@ -623,9 +673,8 @@ pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
     };
     cuts.push(bytes.len());
     cuts.dedup();
-    let file = std::fs::File::create(&a.output)
-        .with_context(|| format!("cannot create {}", a.output.display()))?;
-    let mut gif = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+    let mut gif_bytes = Vec::new();
+    let mut gif = GifEncoder::new_with_speed(&mut gif_bytes, 10);
     gif.set_repeat(Repeat::Infinite)?;
     let mut dec = StreamDecoder::new(qcs::Limits::default());
     let mut fed = 0;
@@ -649,7 +698,7 @@ pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
         let mut rgba = pic.decoded().image.to_rgba8();
         stamp(&mut rgba, &format!("{cut}B"));
         let delay = if pic.is_final() {
-            a.delay_ms * 4
+            a.delay_ms.saturating_mul(4)
         } else {
             a.delay_ms
         };
@@ -661,6 +710,12 @@ pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
         ))?;
         frames += 1;
     }
+    drop(gif);
+    if frames == 0 {
+        return Err(qcs::Error::NeedMoreData).with_context(ctx);
+    }
+    std::fs::write(&a.output, &gif_bytes)
+        .with_context(|| format!("cannot write {}", a.output.display()))?;
     if !quiet {
         eprintln!("{}: {frames} frames", a.output.display());
     }

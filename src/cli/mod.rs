@@ -83,8 +83,12 @@ fn exit_code(e: &anyhow::Error) -> u8 {
                 _ => 1,
             };
         }
-        if cause.downcast_ref::<image::ImageError>().is_some() {
-            return 3;
+        if let Some(ie) = cause.downcast_ref::<image::ImageError>() {
+            return match ie {
+                image::ImageError::IoError(_) => 1,
+                image::ImageError::Limits(_) => 4,
+                _ => 3,
+            };
         }
     }
     1
@@ -109,7 +113,19 @@ pub fn main() -> ExitCode {
         // The reader went away (`qcs sites … | head`): nothing more to say, as for `yes`.
         Err(e) if closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("qcs: error: {e:#}");
+            // `{e:#}` repeats a cause whose parent already prints it (`thiserror`'s
+            // "malformed file: {0}" with `#[from]`, the image crate's errors): skip those.
+            let mut msg = String::new();
+            for cause in e.chain() {
+                let s = cause.to_string();
+                if !msg.ends_with(&s) {
+                    if !msg.is_empty() {
+                        msg.push_str(": ");
+                    }
+                    msg.push_str(&s);
+                }
+            }
+            eprintln!("qcs: error: {msg}");
             ExitCode::from(exit_code(&e))
         }
     }
@@ -126,6 +142,77 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("empty size {s:?}"));
     }
     Ok((w, h))
+}
+
+/// A scale factor for clap: finite and above 0.
+pub fn parse_scale(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a finite number above 0, got {s:?}")),
+    }
+}
+
+/// A count for clap: an integer of at least 1.
+pub fn parse_count(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(v) if v > 0 => Ok(v),
+        _ => Err(format!("expected an integer of at least 1, got {s:?}")),
+    }
+}
+
+/// The samplers' CLI names, for clap's value parser.
+pub const SAMPLERS: [&str; 6] = [
+    "quasicrystal",
+    "periodic",
+    "jittered",
+    "halton",
+    "random",
+    "farthest",
+];
+
+/// Reads an image, recognising its format by content (as `render` does), not by extension.
+pub fn open_image(p: &std::path::Path) -> anyhow::Result<image::DynamicImage> {
+    use anyhow::Context;
+    let ctx = || format!("cannot read image {}", p.display());
+    image::ImageReader::open(p)
+        .map_err(image::ImageError::IoError)
+        .and_then(|r| r.with_guessed_format().map_err(image::ImageError::IoError))
+        .and_then(|r| r.decode())
+        .with_context(ctx)
+}
+
+/// The image format an output path's extension names.
+pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageFormat> {
+    image::ImageFormat::from_path(path).map_err(|_| {
+        anyhow::anyhow!(
+            "cannot write {}: unknown image format (use .png, .jpg, .gif, .bmp, .tiff, .webp, .pnm, .qoi or .tga)",
+            path.display()
+        )
+    })
+}
+
+/// Writes `img` to `path` in the format of its extension, widening grey or grey+alpha to
+/// RGB(A) for encoders that lack them (GIF, QOI, TIFF), and creating the file only once the
+/// whole image is encoded (no empty or partial file on error).
+pub fn save_image(img: &image::DynamicImage, path: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let format = output_format(path)?;
+    let mut buf = std::io::Cursor::new(Vec::new());
+    if let Err(e) = img.write_to(&mut buf, format) {
+        if !matches!(e, image::ImageError::Unsupported(_)) {
+            anyhow::bail!("cannot write {}: {e}", path.display());
+        }
+        buf = std::io::Cursor::new(Vec::new());
+        let wide = if img.color().has_alpha() {
+            image::DynamicImage::ImageRgba8(img.to_rgba8())
+        } else {
+            image::DynamicImage::ImageRgb8(img.to_rgb8())
+        };
+        wide.write_to(&mut buf, format)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+    }
+    std::fs::write(path, buf.into_inner())
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// A sampler by its CLI name (the quasicrystal included).

@@ -17,7 +17,10 @@ pub enum Style {
     Voronoi,
     Delaunay,
     Sites,
+    /// The sites' power spectrum: a square of the larger --size side, 16–2048 px.
     Spectrum,
+    /// The star map's phase field, contour and level panels side by side, each --size
+    /// (default 512x512); it depends on no image, so INPUT is not read.
     Phase,
 }
 
@@ -33,11 +36,11 @@ pub struct RenderArgs {
     /// Number of samples (default: all of a .qcs file; 4225 for an image).
     #[arg(long)]
     pub samples: Option<usize>,
-    /// Output size WxH (default: the image's size).
+    /// Output size WxH (default: the image's size; see the spectrum and phase styles).
     #[arg(long, value_parser = super::parse_size)]
     pub size: Option<(u32, u32)>,
     /// Sampler for an ordinary image: quasicrystal, periodic, jittered, halton, random, farthest.
-    #[arg(long, default_value = "quasicrystal")]
+    #[arg(long, default_value = "quasicrystal", value_parser = clap::builder::PossibleValuesParser::new(super::SAMPLERS))]
     pub sampler: String,
     /// Seed of the random samplers.
     #[arg(long, default_value_t = 0)]
@@ -123,6 +126,9 @@ fn samples(a: &RenderArgs) -> Result<Samples> {
         .to_rgb8();
     let (w, h) = img.dimensions();
     let n = a.samples.unwrap_or(4225);
+    qcs::Limits::default()
+        .check_samples(n as u64)
+        .map_err(qcs::Error::from)?;
     let Some(sampler) = super::sampler_by_name(&a.sampler, a.seed) else {
         bail!("unknown sampler {:?}", a.sampler);
     };
@@ -147,8 +153,6 @@ fn samples(a: &RenderArgs) -> Result<Samples> {
 }
 
 pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
-    let out = a.output.clone();
-    let save_err = || format!("cannot write {}", out.display());
     if a.style == Style::Phase {
         let size = a.size.unwrap_or((512, 512));
         let window = styles::PhaseWindow::centred(1.5);
@@ -157,12 +161,15 @@ pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
         let mut both = image::RgbImage::new(size.0 * 2, size.1);
         image::imageops::replace(&mut both, &contour, 0, 0);
         image::imageops::replace(&mut both, &level, size.0 as i64, 0);
-        both.save(&a.output).with_context(save_err)?;
+        super::save_image(&image::DynamicImage::ImageRgb8(both), &a.output)?;
         return Ok(());
     }
     let samples = samples(&a)?;
     let (pos, col, source) = (&samples.pos, &samples.col, samples.source);
     let size = a.size.unwrap_or(source);
+    qcs::Limits::default()
+        .check_output(size.0 as u64, size.1 as u64)
+        .map_err(qcs::Error::from)?;
     let sites = samples.sites();
     let img = match a.style {
         Style::Mosaic => styles::mosaic(sites, col, source, size)?,
@@ -176,7 +183,7 @@ pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
         }
         Style::Phase => unreachable!("handled above"),
     };
-    img.save(&a.output).with_context(save_err)?;
+    super::save_image(&image::DynamicImage::ImageRgb8(img), &a.output)?;
     if !quiet {
         eprintln!(
             "{}: {:?} of {} samples",
@@ -207,9 +214,7 @@ pub struct EvalArgs {
 pub fn eval(a: EvalArgs, quiet: bool) -> Result<()> {
     let mut images = Vec::new();
     for p in &a.images {
-        let img = image::open(p)
-            .with_context(|| format!("cannot read image {}", p.display()))?
-            .to_rgb8();
+        let img = super::open_image(p)?.to_rgb8();
         let name = p
             .file_stem()
             .and_then(|s| s.to_str())
@@ -237,7 +242,8 @@ pub fn eval(a: EvalArgs, quiet: bool) -> Result<()> {
         bar.set_length(p.total as u64);
         bar.set_position(p.done as u64);
         bar.set_message(p.stage.to_string());
-    })?;
+    })
+    .with_context(|| format!("cannot write the evaluation into {}", a.out.display()))?;
     bar.finish_and_clear();
     if !quiet {
         for c in &report.claims {

@@ -17,7 +17,7 @@ pub struct SitesArgs {
     #[arg(long)]
     pub count: usize,
     /// Sampling strategy: quasicrystal, periodic, jittered, halton, random, farthest.
-    #[arg(long, default_value = "quasicrystal")]
+    #[arg(long, default_value = "quasicrystal", value_parser = clap::builder::PossibleValuesParser::new(super::SAMPLERS))]
     pub sampler: String,
     /// Seed of the random strategies.
     #[arg(long, default_value_t = 0)]
@@ -25,6 +25,9 @@ pub struct SitesArgs {
 }
 
 pub fn run(a: SitesArgs) -> Result<()> {
+    qcs::Limits::default()
+        .check_samples(a.count as u64)
+        .map_err(qcs::Error::from)?;
     let out = std::io::stdout();
     let mut out = std::io::BufWriter::new(out.lock());
     if a.sampler == "quasicrystal" {
