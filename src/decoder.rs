@@ -464,6 +464,10 @@ impl Default for DecodeOptions {
 /// A prefix that ends inside the header is [`Error::NeedMoreData`]; any longer prefix is a
 /// picture ([`DecodedImage::is_final`] says whether it is the whole file).
 ///
+/// Work is spread over the current `rayon` pool: the rows of the picture, and for
+/// [`Method::Gouraud`] the cells, which are built while the colours decode. Run it inside a
+/// one-thread pool (`ThreadPool::install`) to keep it on one core; the picture is the same.
+///
 /// ```
 /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(30, 20, |x, _| image::Luma([x as u8 * 8])));
 /// let bytes = qcs::encode(&img, &Default::default())?;
