@@ -5,6 +5,9 @@ use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 
+/// The bundled photograph.
+const ROCKET: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+
 fn qcs() -> Command {
     Command::new(env!("CARGO_BIN_EXE_qcs"))
 }
@@ -22,9 +25,8 @@ fn run(cmd: &mut Command) -> Output {
 /// Encode, inspect and decode a bundled photograph; the decoded picture has the asked size.
 #[test]
 fn encode_info_decode() {
-    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
     let (file, png) = (scratch("rocket.qcs"), scratch("rocket-small.png"));
-    let enc = run(qcs().args(["-q", "encode", rocket]).arg(&file));
+    let enc = run(qcs().args(["-q", "encode", ROCKET]).arg(&file));
     assert!(enc.status.success(), "{enc:?}");
     let info = run(qcs().arg("info").arg(&file));
     assert!(info.status.success(), "{info:?}");
@@ -69,20 +71,10 @@ fn closed_stdout_ends_quietly() {
     reader.read_line(&mut first).expect("a line");
     assert_eq!(first, "index,x,y,n0,n1,n2,n3\n");
     drop(reader);
-    let out = child.wait_with_output().expect("qcs ends");
-    assert!(out.status.success(), "{out:?}");
-    assert!(
-        out.stderr.is_empty(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ends_quietly(child);
 
     // `info` writes line by line: a pipe closed before it starts must not make it panic.
-    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
-    let file = scratch("pipe.qcs");
-    assert!(run(qcs().args(["-q", "encode", rocket]).arg(&file))
-        .status
-        .success());
+    let file = rocket_qcs("pipe.qcs");
     let mut child = qcs()
         .arg("info")
         .arg(&file)
@@ -91,18 +83,12 @@ fn closed_stdout_ends_quietly() {
         .spawn()
         .expect("qcs runs");
     drop(child.stdout.take());
-    let out = child.wait_with_output().expect("qcs ends");
-    assert!(out.status.success(), "{out:?}");
-    assert!(
-        out.stderr.is_empty(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ends_quietly(child);
 
     // `demo` prints its table only once every file is written: a closed pipe loses none.
     let dir = scratch("demo-pipe");
     let mut child = qcs()
-        .args(["demo", rocket])
+        .args(["demo", ROCKET])
         .arg(&dir)
         .stdout(Stdio::piped())
         .spawn()
@@ -111,6 +97,14 @@ fn closed_stdout_ends_quietly() {
     assert!(child.wait().expect("qcs ends").success());
     let files = std::fs::read_dir(&dir).expect("demo dir").count();
     assert_eq!(files, 6, "rocket.qcs, four previews and the strip");
+}
+
+/// The child succeeds and says nothing on stderr.
+fn ends_quietly(child: std::process::Child) {
+    let out = child.wait_with_output().expect("qcs ends");
+    assert!(out.status.success(), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.is_empty(), "{err}");
 }
 
 fn code(cmd: &mut Command) -> (Option<i32>, String) {
@@ -122,9 +116,8 @@ fn code(cmd: &mut Command) -> (Option<i32>, String) {
 }
 
 fn rocket_qcs(name: &str) -> PathBuf {
-    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
     let file = scratch(name);
-    assert!(run(qcs().args(["-q", "encode", rocket]).arg(&file))
+    assert!(run(qcs().args(["-q", "encode", ROCKET]).arg(&file))
         .status
         .success());
     file
@@ -145,11 +138,10 @@ fn limits_hold_in_every_subcommand() {
         ]));
         assert_eq!(c, Some(4), "{style}: {err}");
     }
-    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
     let (c, err) = code(
         qcs()
             .arg("render")
-            .arg(rocket)
+            .arg(ROCKET)
             .arg(&out)
             .args(["--samples", "100000000"]),
     );
@@ -169,13 +161,12 @@ fn limits_hold_in_every_subcommand() {
 /// Nonsense numbers are usage errors (exit 2), not a silent one-sample file or exit 1.
 #[test]
 fn nonsense_numbers_are_usage_errors() {
-    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
     let file = rocket_qcs("numbers.qcs");
     let out = scratch("numbers.png");
     for bad in [["--density", "0"], ["--density", "nan"], ["--samples", "0"]] {
         let (c, err) = code(
             qcs()
-                .args(["encode", rocket])
+                .args(["encode", ROCKET])
                 .arg(scratch("n.qcs"))
                 .args(bad),
         );
@@ -203,9 +194,8 @@ fn nonsense_numbers_are_usage_errors() {
 /// format without grey, and a format recognised by content needs no extension.
 #[test]
 fn files_are_written_whole_or_not_at_all() {
-    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
     let photo = scratch("photo.png");
-    std::fs::copy(rocket, &photo).expect("copy");
+    std::fs::copy(ROCKET, &photo).expect("copy");
     let before = std::fs::read(&photo).expect("read");
     let (c, _) = code(qcs().arg("encode").arg(&photo).arg(&photo));
     assert_eq!(c, Some(1));
@@ -218,7 +208,7 @@ fn files_are_written_whole_or_not_at_all() {
     let (a, b) = (scratch("a"), scratch("b"));
     for d in [&a, &b] {
         std::fs::create_dir_all(d).expect("dir");
-        std::fs::copy(rocket, d.join("x.png")).expect("copy");
+        std::fs::copy(ROCKET, d.join("x.png")).expect("copy");
     }
     let dir = scratch("out-dir");
     let (c, err) = code(
@@ -234,7 +224,7 @@ fn files_are_written_whole_or_not_at_all() {
 
     // Content, not extension, says what an input is.
     let bare = scratch("no-extension");
-    std::fs::copy(rocket, &bare).expect("copy");
+    std::fs::copy(ROCKET, &bare).expect("copy");
     assert!(run(qcs()
         .args(["-q", "encode"])
         .arg(&bare)
@@ -274,8 +264,7 @@ fn files_are_written_whole_or_not_at_all() {
 /// A library error is printed once, not once per level of its cause chain.
 #[test]
 fn errors_are_printed_once() {
-    let rocket = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
-    let (c, err) = code(qcs().arg("info").arg(rocket));
+    let (c, err) = code(qcs().arg("info").arg(ROCKET));
     assert_eq!(c, Some(3));
     let line = err.lines().next().unwrap_or_default();
     assert_eq!(line.matches("bad magic byte").count(), 1, "{line}");
