@@ -19,7 +19,7 @@ pub struct DecodedImage {
     pub samples_used: u64,
     /// How many of those are verified by their chunk's CRC (the rest come from a partial chunk).
     pub samples_verified: u64,
-    /// Levels received completely and verified.
+    /// Levels received completely and verified, among those the picture was rendered from.
     pub levels_complete: u32,
     /// Whether this is the final picture: every sample of the file, all verified.
     pub is_final: bool,
@@ -243,6 +243,14 @@ impl StreamDecoder {
             Event::Stopped { error } => {
                 let c = self.channels();
                 self.colours.truncate(self.verified as usize * c);
+                // The kept sample set may hold samples of the dropped chunk: start afresh.
+                if self
+                    .set
+                    .as_ref()
+                    .is_some_and(|s| s.len() as u64 > self.verified)
+                {
+                    self.set = None;
+                }
                 self.unpacker = None;
                 self.stopped = Some(error.clone());
             }
@@ -322,7 +330,10 @@ impl StreamDecoder {
         self.check_output_size(width, height)?;
         let n = self.sample_count();
         let c = self.channels();
-        let mut set = self.set.take().unwrap_or_else(|| self.new_set(&h));
+        let mut set = match self.set.take() {
+            Some(set) if set.len() as u64 <= n => set,
+            _ => self.new_set(&h),
+        };
         let have = set.len();
         let (sites, col) = self.samples(n);
         for k in have..n as usize {
@@ -394,11 +405,15 @@ impl StreamDecoder {
             set.seed_cells(seed);
         }
         let pixels = set.render(method, width, height);
+        // Levels complete within the samples used.
+        let within = (0..self.levels_complete)
+            .take_while(|&l| h.level_range(l).is_some_and(|r| r.end <= used))
+            .count() as u32;
         Ok(DecodedImage {
             image: to_image(h.layout, width, height, pixels),
             samples_used: used,
             samples_verified: self.verified.min(used),
-            levels_complete: self.levels_complete,
+            levels_complete: within,
             is_final: used == h.total_samples && self.verified == h.total_samples,
         })
     }

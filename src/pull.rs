@@ -2,7 +2,7 @@
 
 use crate::decoder::{Picture, StreamDecoder};
 use crate::reconstruction::Method;
-use crate::{Limits, Result};
+use crate::{Error, Limits, Result};
 use std::io::Read;
 
 /// When [`Previews`] yields a picture.
@@ -10,11 +10,16 @@ use std::io::Read;
 pub enum Cadence {
     /// After every completed level (and at the end of the stream).
     PerLevel,
-    /// After every `K` bytes read (and at the end of the stream).
+    /// After every `K` bytes read (and at the end of the stream), however the reader splits
+    /// them.
     EveryBytes(usize),
 }
 
 /// An iterator of pictures read from a stream: previews, then the final picture.
+///
+/// Bytes after the last level (metadata chunks) are still read and checked after the final
+/// picture: damage there ends the iteration with an error, as [`crate::decode`] reports it. A
+/// stream that ends before its header is complete yields [`crate::Error::NeedMoreData`].
 ///
 /// ```
 /// use qcs::{Cadence, Method, Previews};
@@ -38,6 +43,10 @@ pub struct Previews<R> {
     buf: Vec<u8>,
     pos: usize,
     len: usize,
+    /// Bytes pushed since the last [`Cadence::EveryBytes`] picture.
+    since: usize,
+    /// Whether the final picture was yielded (the rest of the stream is only checked).
+    final_sent: bool,
     finished: bool,
 }
 
@@ -51,8 +60,9 @@ impl<R: Read> Previews<R> {
         size: Option<(u32, u32)>,
         limits: Limits,
     ) -> Self {
+        // A read size only: pictures follow the bytes pushed, not the reads.
         let chunk = match cadence {
-            Cadence::EveryBytes(k) => k.clamp(1, 1 << 20),
+            Cadence::EveryBytes(k) => k.clamp(1 << 12, 1 << 20),
             Cadence::PerLevel => 1 << 12,
         };
         Previews {
@@ -65,6 +75,8 @@ impl<R: Read> Previews<R> {
             buf: vec![0; chunk],
             pos: 0,
             len: 0,
+            since: 0,
+            final_sent: false,
             finished: false,
         }
     }
@@ -93,7 +105,10 @@ impl<R: Read> Iterator for Previews<R> {
                 match self.reader.read(&mut self.buf) {
                     Ok(0) => {
                         self.finished = true;
-                        return self.picture();
+                        if self.final_sent {
+                            return None;
+                        }
+                        return Some(self.picture().unwrap_or(Err(Error::NeedMoreData)));
                     }
                     Ok(n) => (self.pos, self.len) = (0, n),
                     Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -103,10 +118,12 @@ impl<R: Read> Iterator for Previews<R> {
                     }
                 }
             }
-            // Per level: feed small pieces so that a level boundary inside a read is seen.
+            // Per level: feed small pieces so that a level boundary inside a read is seen;
+            // every K bytes: feed up to the next multiple of K.
+            let left = self.len - self.pos;
             let step = match self.cadence {
-                Cadence::EveryBytes(_) => self.len - self.pos,
-                Cadence::PerLevel => (self.len - self.pos).min(32),
+                Cadence::EveryBytes(k) => left.min(k.max(1) - self.since),
+                Cadence::PerLevel => left.min(32),
             };
             let piece = self.pos..self.pos + step;
             self.pos += step;
@@ -115,13 +132,22 @@ impl<R: Read> Iterator for Previews<R> {
                 self.pos = self.len;
                 return Some(Err(e));
             }
+            if self.final_sent {
+                continue;
+            }
             if self.decoder.is_complete() {
-                self.finished = true;
-                self.pos = self.len;
+                self.final_sent = true;
                 return self.picture();
             }
             let due = match self.cadence {
-                Cadence::EveryBytes(_) => true,
+                Cadence::EveryBytes(k) => {
+                    self.since += step;
+                    let due = self.since >= k.max(1);
+                    if due {
+                        self.since = 0;
+                    }
+                    due
+                }
                 Cadence::PerLevel => self.decoder.levels_complete() > self.levels_seen,
             };
             if due {

@@ -1,0 +1,163 @@
+//! The push decoder (`StreamDecoder`) and the pull decoder (`Previews`) against the one-shot
+//! `decode` on the same bytes, in the cases a library audit found them to disagree.
+
+use qcs::container::ParserOptions;
+use qcs::{decode, encode, Cadence, DecodeOptions, EncodeOptions, Error, Limits, Method};
+use qcs::{Previews, StreamDecoder};
+
+fn gradient() -> image::DynamicImage {
+    image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(48, 32, |x, y| {
+        image::Rgb([x as u8 * 5, y as u8 * 7, (x * y) as u8])
+    }))
+}
+
+fn file() -> Vec<u8> {
+    let opts = EncodeOptions {
+        first_level: 8,
+        ..Default::default()
+    };
+    encode(&gradient(), &opts).expect("encode")
+}
+
+/// A reader that returns at most 10 bytes per call, as sockets and pipes may.
+struct Trickle<'a>(&'a [u8]);
+
+impl std::io::Read for Trickle<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = buf.len().min(10).min(self.0.len());
+        buf[..n].copy_from_slice(&self.0[..n]);
+        self.0 = &self.0[n..];
+        Ok(n)
+    }
+}
+
+fn previews<R: std::io::Read>(r: R, cadence: Cadence) -> Vec<Result<qcs::Picture, Error>> {
+    Previews::new(r, cadence, Method::Gouraud, None, Limits::default()).collect()
+}
+
+/// In recovery mode a damaged last level is dropped: a render after that shows the verified
+/// samples only, although an earlier preview had drawn some of the dropped ones.
+#[test]
+fn recovery_drops_damaged_samples_from_later_renders() {
+    let mut bad = file();
+    let n = bad.len();
+    bad[n - 2] ^= 0x55; // the last level's CRC
+    for method in [Method::Gouraud, Method::Shepard, Method::Natural] {
+        let opts = ParserOptions::with_limits(Limits::default()).recover(true);
+        let mut d = StreamDecoder::with_options(opts);
+        d.push(&bad[..n - 30]).expect("push");
+        let early = d.render(method, 48, 32).expect("render");
+        assert!(early.decoded().samples_used > early.decoded().samples_verified);
+        d.push(&bad[n - 30..]).expect("push");
+        assert!(d.stopped().is_some());
+        let late = d.render(method, 48, 32).expect("render");
+        let one = decode(
+            &bad,
+            &DecodeOptions {
+                recover: true,
+                method,
+                ..Default::default()
+            },
+        )
+        .expect("decode");
+        assert_eq!(late.decoded().samples_used, one.samples_used, "{method:?}");
+        assert!(late.decoded().image == one.image, "{method:?}");
+    }
+}
+
+/// `Cadence::EveryBytes(K)` gives a picture per K bytes, however the reader splits them.
+#[test]
+fn every_k_bytes_does_not_depend_on_the_reads() {
+    let bytes = file();
+    for k in [1, 100, 333] {
+        let whole = previews(&bytes[..], Cadence::EveryBytes(k));
+        let trickled = previews(Trickle(&bytes), Cadence::EveryBytes(k));
+        assert_eq!(whole.len(), trickled.len(), "K = {k}");
+        // One per K bytes once the header is in (11 bytes here), and the final picture.
+        let (most, least) = (bytes.len().div_ceil(k) + 1, (bytes.len() - 11) / k);
+        assert!((least..=most).contains(&whole.len()), "K = {k}");
+        for (a, b) in whole.iter().zip(&trickled) {
+            let (a, b) = (a.as_ref().expect("picture"), b.as_ref().expect("picture"));
+            assert!(a.decoded().image == b.decoded().image);
+        }
+        assert!(whole
+            .last()
+            .expect("pictures")
+            .as_ref()
+            .expect("final")
+            .is_final());
+    }
+}
+
+/// Bytes after the last level are still read: metadata there is seen, damage there is an
+/// error after the final picture, as `decode` reports it. A stream that ends inside the
+/// header is `NeedMoreData`, as for `decode`.
+#[test]
+fn the_stream_is_read_to_its_end() {
+    let levels = file();
+    let mut damaged = levels.clone();
+    damaged.extend_from_slice(&[0xFF, 0, 0, 0, 0, 0]);
+    let want = decode(&damaged, &DecodeOptions::default()).expect_err("damaged");
+    for pics in [
+        previews(&damaged[..], Cadence::PerLevel),
+        previews(Trickle(&damaged), Cadence::EveryBytes(50)),
+    ] {
+        let (last, rest) = pics.split_last().expect("pictures");
+        let got = last.as_ref().expect_err("damage after the last level");
+        assert_eq!(got.to_string(), want.to_string());
+        assert!(rest.iter().all(|p| p.is_ok()));
+    }
+
+    // A text chunk after the levels, written by the container writer.
+    let header = qcs::container::Header::new(
+        2,
+        1,
+        qcs::container::Layout::Grey,
+        2,
+        1,
+        qcs::container::Coding::Raw { bits: 8 },
+    );
+    let mut w = qcs::container::ContainerWriter::new(Vec::new(), &header).expect("writer");
+    w.write_level(&[200]).expect("level");
+    w.write_level(&[100]).expect("level");
+    w.write_text("Author", "me").expect("text");
+    let with_text = w.finish().expect("file");
+    let mut p = Previews::new(
+        &with_text[..],
+        Cadence::PerLevel,
+        Method::Gouraud,
+        None,
+        Limits::default(),
+    );
+    assert!(p.by_ref().all(|r| r.is_ok()));
+    let mut d = StreamDecoder::new(Limits::default());
+    d.push(&with_text).expect("push");
+    assert_eq!(p.decoder().metadata(), d.metadata());
+    assert_eq!(d.metadata().len(), 1);
+
+    for cut in [0, 3] {
+        let pics = previews(&levels[..cut], Cadence::PerLevel);
+        assert!(
+            matches!(pics[..], [Err(Error::NeedMoreData)]),
+            "{cut} bytes"
+        );
+    }
+}
+
+/// `levels_complete` counts the levels within the samples the picture used.
+#[test]
+fn levels_complete_follows_the_samples_used() {
+    let bytes = file();
+    // Levels of 8, 8, 16, 32 … samples.
+    for (cap, levels) in [(0, 0), (7, 0), (8, 1), (15, 1), (16, 2), (31, 2), (32, 3)] {
+        let d = decode(
+            &bytes,
+            &DecodeOptions {
+                max_samples: Some(cap),
+                ..Default::default()
+            },
+        )
+        .expect("decode");
+        assert_eq!(d.levels_complete, levels, "{cap} samples");
+    }
+}
