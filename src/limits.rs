@@ -6,8 +6,10 @@ use thiserror::Error as ThisError;
 ///
 /// The image and sample limits are checked on the header, before anything sized by it is
 /// allocated; the output limit before a render allocates its picture; the metadata limit
-/// before each metadata chunk is buffered. Within them, a decoder's memory and time follow the
-/// bytes it was given and the output size asked for, not the header's claims.
+/// before each metadata chunk is buffered. Within them, a decoder's memory and time are bounded
+/// by the limits themselves, not by the bytes given: the predictive coding decodes a level whose
+/// residuals are all zero from an empty payload, so a file of a few dozen bytes can hold
+/// [`Limits::max_samples`] samples, and a level's sites are laid out when its chunk begins.
 ///
 /// The defaults are meant for untrusted input (see [`Limits::max_samples`] for the memory they
 /// allow); [`Limits::none`] lifts them to the format's own bounds.
@@ -30,13 +32,15 @@ pub struct Limits {
     /// Largest number of samples (the header's N) that will be decoded and triangulated.
     ///
     /// This is also the bound on the decoder's memory for sites, colours and the triangulation,
-    /// which grows with the samples actually received (never with N itself): about 0.9 KiB per
+    /// which grows with the samples of the levels begun (never with N itself): about 0.9 KiB per
     /// sample at peak for a [`crate::StreamDecoder`] rendering all of them (measured: 895 bytes
     /// per sample for 2^20 samples, Gouraud, before mirror points). Mirror points
     /// (`spec/reconstruction.md` §2) add a few per sample near the edges: O(√N) in all on an
     /// ordinary image, at most 8 per sample (about 2 on a strip a few pixels high). The default 2^21 (enough for a 16-megapixel photo
-    /// at the default 1 sample per 8 pixels) bounds that to about 1.8 GiB, reached only by a file
-    /// that really holds 2^21 samples; raise it for larger images, lower it on small machines.
+    /// at the default 1 sample per 8 pixels) bounds that to about 1.8 GiB, reached by a file whose
+    /// levels hold 2^21 samples (which, for a flat picture in the predictive coding, can be a file
+    /// of a few dozen bytes); raise it for larger images, lower it on small machines or for
+    /// untrusted input.
     pub max_samples: u64,
     /// Largest total size of metadata (ICC, text) kept by a decoder.
     pub max_metadata_bytes: u64,
