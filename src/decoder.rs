@@ -497,42 +497,52 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
         ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover),
     );
     let max_samples = opts.max_samples.unwrap_or(u64::MAX);
-    let (mut seed, mut done) = (None, 0);
-    if opts.method == Method::Gouraud && rayon::current_num_threads() > 1 {
-        // With a thread to spare, the cells of the samples that are surely there (those of
-        // the verified levels) are built while the colours decode: the cells depend only on
-        // the header. The header goes first, so that its limits hold before any work.
-        let head = Header::parse(bytes).map_or(0, |(_, len)| len);
-        dec.push(&bytes[..head])?;
-        done = head;
-        if let (Some(h), Some(seq)) = (dec.header().cloned(), dec.seq) {
-            let sure = crate::container::inspect(bytes)
-                .samples_verified
-                .min(max_samples)
-                .min(h.total_samples) as usize;
-            let mut set = dec.new_set(&h);
-            let blank = vec![0; dec.channels()];
-            let (pushed, built) = rayon::join(
-                || dec.push(&bytes[head..]),
-                move || {
-                    let sites = seq.first(sure);
-                    for s in &sites {
-                        push_site(&mut set, s, &blank);
-                    }
-                    (sites, set.into_seed())
-                },
-            );
-            pushed?;
-            done = bytes.len();
-            if dec.sites.len() < built.0.len() {
-                dec.sites = built.0;
-            }
-            seed = built.1;
-        }
-    }
-    dec.push(&bytes[done..])?;
+    let seed = if opts.method == Method::Gouraud && rayon::current_num_threads() > 1 {
+        push_building_cells(&mut dec, bytes, max_samples)?
+    } else {
+        dec.push(bytes)?;
+        None
+    };
     let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
     let (w, ht) = opts.size.unwrap_or((h.width, h.height));
     let k = max_samples.min(dec.samples_available());
     dec.render_prefix(k, opts.method, w, ht, seed)
+}
+
+/// Pushes `bytes` (a whole buffer) into the fresh decoder `dec` while, on another thread of the
+/// pool, the cells of the samples that are surely there (those of the verified levels, at most
+/// `max_samples`) are built: the cells depend only on the header, so they need not wait for
+/// the colours. The header goes first, so that its limits hold before any work.
+fn push_building_cells(
+    dec: &mut StreamDecoder,
+    bytes: &[u8],
+    max_samples: u64,
+) -> Result<Option<CellSeed>> {
+    let head = Header::parse(bytes).map_or(0, |(_, len)| len);
+    dec.push(&bytes[..head])?;
+    let (Some(h), Some(seq)) = (dec.header().cloned(), dec.seq) else {
+        dec.push(&bytes[head..])?;
+        return Ok(None);
+    };
+    let sure = crate::container::inspect(bytes)
+        .samples_verified
+        .min(max_samples)
+        .min(h.total_samples) as usize;
+    let mut set = dec.new_set(&h);
+    let blank = vec![0; dec.channels()];
+    let (pushed, (sites, seed)) = rayon::join(
+        || dec.push(&bytes[head..]),
+        move || {
+            let sites = seq.first(sure);
+            for s in &sites {
+                push_site(&mut set, s, &blank);
+            }
+            (sites, set.into_seed())
+        },
+    );
+    pushed?;
+    if dec.sites.len() < sites.len() {
+        dec.sites = sites;
+    }
+    Ok(seed)
 }
