@@ -180,9 +180,9 @@ impl RangeEncoder {
 ///
 /// Every call names the bytes received so far and the payload length; a byte at or past the
 /// length reads as 0x00. Where bytes are missing the code value is only known to lie in an
-/// interval: its low end `lo` reads the missing bytes as 0x00, its high end reads them as 0xFF
-/// and is kept below `range` (a valid payload's code always is). A bit is decoded only when
-/// both ends give it, so no byte still to come can change it. Missing bytes are always the
+/// interval: its low end `lo` reads the missing bytes as 0x00, its high end reads them as 0xFF.
+/// A bit is decoded only when both ends give it and the high end is below `range` (as a valid
+/// payload's code always is), so no byte still to come can change it, whatever the payload. Missing bytes are always the
 /// newest ones in the code window; when they arrive, `lo` takes their values. A decode that
 /// cannot be decided returns `None` and leaves the decoder unusable until restored from a copy
 /// (it is `Copy`, so callers snapshot it).
@@ -256,14 +256,19 @@ impl RangeDecoder {
         self.pos += 1;
     }
 
-    /// The high end of the code interval.
-    fn hi(&self) -> u32 {
+    /// The high end of the code interval while bytes are missing, if every code in it is
+    /// valid (below `range`, as every stream the encoder writes keeps it). Bits are decided
+    /// from a partial interval only then: an arbitrary payload can reach codes at or above
+    /// `range`, where the interval would no longer bound the code after the next shift, and
+    /// the bits decided from a prefix must be those decided from the whole payload.
+    fn hi(&self) -> Option<u32> {
         let spread = if self.missing >= 4 {
             u32::MAX as u64
         } else {
             (1u64 << (8 * self.missing)) - 1
         };
-        (self.lo as u64 + spread).min(self.range as u64 - 1) as u32
+        let hi = self.lo as u64 + spread;
+        (hi < self.range as u64).then_some(hi as u32)
     }
 
     /// Decodes one bit with probability `p` (then adapts `p`), from `bytes` (received so far)
@@ -278,15 +283,22 @@ impl RangeDecoder {
         }
         self.refresh(bytes, len);
         let bound = (self.range >> PROB_BITS) * p.p as u32;
-        let bit = if self.hi() < bound {
+        let below = if self.missing == 0 {
+            self.lo < bound
+        } else {
+            match self.hi() {
+                Some(hi) if hi < bound => true,
+                Some(_) if self.lo >= bound => false,
+                _ => return None,
+            }
+        };
+        let bit = if below {
             self.range = bound;
             false
-        } else if self.lo >= bound {
+        } else {
             self.lo -= bound;
             self.range -= bound;
             true
-        } else {
-            return None;
         };
         while self.range < TOP {
             self.range <<= 8;
