@@ -30,6 +30,8 @@ pub mod reconstruction;
 pub mod sampling;
 pub mod sites;
 pub mod styles;
+#[cfg(test)]
+mod testing;
 
 pub use decoder::{decode, DecodeOptions, DecodedImage, Picture, StreamDecoder};
 pub use encoder::{encode, encode_to, EncodeOptions};

@@ -221,13 +221,7 @@ mod tests {
     #[test]
     fn key_is_monotone_on_near_ties() {
         // Pairs of |x*|²-like values: small value, large conjugate.
-        let mut s = 0x1234_5678_9abc_def0u64;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        };
+        let mut next = crate::testing::xorshift(0x1234_5678_9abc_def0);
         for _ in 0..20000 {
             let q = (next() % (1 << 34)) as i128 - (1 << 33);
             // p ≈ −qτ so that the value is small

@@ -194,13 +194,8 @@ mod tests {
 
     #[test]
     fn values_match_floating_point() {
-        let mut s = 7u64;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s % 41) as i64 - 20
-        };
+        let mut s = crate::testing::xorshift(7);
+        let mut next = || (s() % 41) as i64 - 20;
         for _ in 0..2000 {
             let p: Vec<ZZeta> = (0..4)
                 .map(|_| ZZeta::new([next(), next(), next(), next()]))

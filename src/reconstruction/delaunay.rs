@@ -948,13 +948,8 @@ mod tests {
     #[test]
     fn star_determinants_multiply_to_the_norm() {
         use crate::lattice::{incircle_value, orient_value, SIN72, TAU};
-        let mut next = 99u64;
-        let mut rnd = || {
-            next ^= next << 13;
-            next ^= next >> 7;
-            next ^= next << 17;
-            (next % 13) as i64 - 6
-        };
+        let mut next = crate::testing::xorshift(99);
+        let mut rnd = || (next() % 13) as i64 - 6;
         let k = 4.0 * TAU / (SIN72 * SIN72);
         let norm = |d: crate::lattice::ZTau| (d.a * d.a + d.a * d.b - d.b * d.b).abs() as f64;
         let mut nonzero = 0;
@@ -998,13 +993,8 @@ mod tests {
             }
             let z = |i: u32| s.zz[i as usize];
             let mut zeros = [0usize; 2];
-            let mut next = 12345u64;
-            let mut rnd = |m: usize| {
-                next ^= next << 13;
-                next ^= next >> 7;
-                next ^= next << 17;
-                (next % m as u64) as u32
-            };
+            let mut next = crate::testing::xorshift(12345);
+            let mut rnd = |m: usize| (next() % m as u64) as u32;
             for a in 0..n as u32 {
                 // Four points near each other: `a` and three of its 8 nearest.
                 let pa = s.xy[a as usize];

@@ -491,13 +491,8 @@ mod tests {
     use crate::sites::{Point, Quasicrystal};
 
     fn rng(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        }
+        let mut next = crate::testing::xorshift(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+        move || (next() >> 11) as f64 / (1u64 << 53) as f64
     }
 
     /// Shepard by brute force: every sample's squared distance, sorted with ties by index,
