@@ -243,14 +243,6 @@ impl StreamDecoder {
             Event::Stopped { error } => {
                 let c = self.channels();
                 self.colours.truncate(self.verified as usize * c);
-                // The kept sample set may hold samples of the dropped chunk: start afresh.
-                if self
-                    .set
-                    .as_ref()
-                    .is_some_and(|s| s.len() as u64 > self.verified)
-                {
-                    self.set = None;
-                }
                 self.unpacker = None;
                 self.stopped = Some(error.clone());
             }
@@ -330,6 +322,8 @@ impl StreamDecoder {
         self.check_output_size(width, height)?;
         let n = self.sample_count();
         let c = self.channels();
+        // A kept set with more samples than there are now (a recovery dropped a damaged
+        // chunk's) is rebuilt.
         let mut set = match self.set.take() {
             Some(set) if set.len() as u64 <= n => set,
             _ => self.new_set(&h),
