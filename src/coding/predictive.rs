@@ -210,9 +210,20 @@ struct Predictor {
     cell: i64,
     gw: i64,
     gh: i64,
-    /// Per cell, its samples' positions and indices (inline: no second lookup per candidate).
-    grid: Vec<Vec<([i64; 2], u32)>>,
+    /// Cell `c` holds `entries[start[c]..start[c + 1]]`: the positions and indices of the
+    /// samples laid out so far (those coded and those of the level being coded), in index
+    /// order, so the coded ones come first.
+    start: Vec<u32>,
+    entries: Vec<([i64; 2], u32)>,
+    /// The level being coded: its positions, and the nearest earlier samples of its samples
+    /// `batch..batch + near.len()` (found in batches, in grid order, for locality).
+    level: Vec<[i64; 2]>,
+    near: Vec<[(i64, u32); NEIGHBOURS]>,
+    batch: usize,
 }
+
+/// Samples of a level whose nearest earlier samples are found at once.
+const BATCH: usize = 1 << 14;
 
 impl Predictor {
     fn new(width: u32, height: u32) -> Self {
@@ -225,22 +236,74 @@ impl Predictor {
             cell: 1,
             gw: 0,
             gh: 0,
-            grid: Vec::new(),
+            start: Vec::new(),
+            entries: Vec::new(),
+            level: Vec::new(),
+            near: Vec::new(),
+            batch: 0,
         }
     }
 
-    /// Rebuilds the grid for a level that will end with `end` samples (≈ 2 per cell then).
-    fn begin_level(&mut self, end: usize) {
+    /// Lays out the samples coded so far and the positions of the next level, in a grid of
+    /// about 2 per cell at the level's end. The level's samples are then pushed in order.
+    fn begin_level(&mut self, level: &[[i64; 2]]) {
+        let end = self.pos.len() + level.len();
         let area = self.width as i128 * self.height as i128;
         let c = ((2 * area / end.max(1) as i128) as f64).sqrt() as i64;
         self.cell = c.max(POS_ONE);
         self.gw = (self.width + self.cell - 1) / self.cell + 1;
         self.gh = (self.height + self.cell - 1) / self.cell + 1;
-        self.grid = vec![Vec::new(); (self.gw * self.gh) as usize];
-        for i in 0..self.pos.len() {
-            let k = self.cell_of(self.pos[i]);
-            self.grid[k].push((self.pos[i], i as u32));
+        let cells = (self.gw * self.gh) as usize;
+        self.start.clear();
+        self.start.resize(cells + 1, 0);
+        for &p in self.pos.iter().chain(level) {
+            let k = self.cell_of(p);
+            self.start[k + 1] += 1;
         }
+        for k in 0..cells {
+            self.start[k + 1] += self.start[k];
+        }
+        let mut fill = self.start[..cells].to_vec();
+        self.entries.clear();
+        self.entries.resize(end, ([0, 0], 0));
+        for (i, &p) in self.pos.iter().chain(level).enumerate() {
+            let k = self.cell_of(p);
+            self.entries[fill[k] as usize] = (p, i as u32);
+            fill[k] += 1;
+        }
+        self.level.clear();
+        self.level.extend_from_slice(level);
+        self.near.clear();
+        self.batch = 0;
+    }
+
+    /// The number within its level of the next sample to code.
+    fn next(&self) -> usize {
+        self.pos.len() + self.level.len() - self.entries.len()
+    }
+
+    /// The up to `NEIGHBOURS` samples nearest to the next sample of the level (which must
+    /// exist), among those before it, as (squared distance, index), sorted.
+    fn nearest_to_next(&mut self, best: &mut Vec<(i64, u32)>) {
+        let base = self.entries.len() - self.level.len();
+        let j = self.next();
+        if j >= self.batch + self.near.len() {
+            // The next batch, in grid order: neighbouring queries read neighbouring cells.
+            self.batch = j;
+            let end = (j + BATCH).min(self.level.len());
+            let mut order: Vec<(usize, usize)> =
+                (j..end).map(|j| (self.cell_of(self.level[j]), j)).collect();
+            order.sort_unstable();
+            self.near.clear();
+            self.near
+                .resize(end - j, [(i64::MAX, u32::MAX); NEIGHBOURS]);
+            for (_, k) in order {
+                self.near[k - j] = self.nearest(self.level[k], (base + k) as u32);
+            }
+        }
+        best.clear();
+        let near = &self.near[j - self.batch];
+        best.extend(near.iter().copied().take_while(|e| e.1 != u32::MAX));
     }
 
     fn cell_xy(&self, p: [i64; 2]) -> (i64, i64) {
@@ -255,25 +318,43 @@ impl Predictor {
         (y * self.gw + x) as usize
     }
 
-    fn push(&mut self, p: [i64; 2], v: &[i32], mag: u8) {
+    /// Appends the next sample of the level laid out by [`Predictor::begin_level`] (which must
+    /// exist): its coded values and luma residual magnitude.
+    fn push(&mut self, v: &[i32], mag: u8) {
         self.mags.push(mag);
-        let k = self.cell_of(p);
-        self.grid[k].push((p, self.pos.len() as u32));
-        self.pos.push(p);
+        self.pos.push(self.level[self.next()]);
         self.values.extend_from_slice(v);
     }
 
     /// The up to `NEIGHBOURS` nearest earlier samples as (squared distance, index), sorted.
-    fn nearest(&self, p: [i64; 2], best: &mut Vec<(i64, u32)>) {
-        best.clear();
-        if self.pos.is_empty() {
-            return;
-        }
-        // The nearest so far, sorted by (squared distance, index), and how many were taken.
+    ///
+    /// Cells are visited in square rings around `p`'s cell; a cell is skipped when even its
+    /// nearest point is farther than the current `NEIGHBOURS`-th, and the search ends when no
+    /// point outside the rings visited can be as near.
+    fn nearest(&self, p: [i64; 2], coded: u32) -> [(i64, u32); NEIGHBOURS] {
+        // The nearest so far, sorted by (squared distance, index); (i64::MAX, u32::MAX) fills.
         let mut top = [(i64::MAX, u32::MAX); NEIGHBOURS];
+        if coded == 0 {
+            return top;
+        }
+        // How many were taken.
         let mut found = 0usize;
-        let mut consider = |cell: &[([i64; 2], u32)]| {
-            for &(q, i) in cell {
+        let cell = self.cell;
+        let (cx, cy) = self.cell_xy(p);
+        // Distance from p to the cells from `lo` to `hi` along one axis (0 inside): a lower
+        // bound for any point in them, also those clamped into a border cell.
+        let gap = |v: i64, lo: i64, hi: i64| (lo * cell - v).max(v - (hi + 1) * cell).max(0);
+        let visit = |x: i64, y: i64, top: &mut [(i64, u32); NEIGHBOURS], found: &mut usize| {
+            let (gx, gy) = (gap(p[0], x, x), gap(p[1], y, y));
+            if gx * gx + gy * gy > top[NEIGHBOURS - 1].0 {
+                return;
+            }
+            let c = (y * self.gw + x) as usize;
+            let run = &self.entries[self.start[c] as usize..self.start[c + 1] as usize];
+            for &(q, i) in run {
+                if i >= coded {
+                    break;
+                }
                 let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
                 let e = (dx * dx + dy * dy, i);
                 if e < top[NEIGHBOURS - 1] {
@@ -283,36 +364,48 @@ impl Predictor {
                         k -= 1;
                     }
                     top[k] = e;
-                    found += 1;
+                    *found += 1;
                 }
             }
-            (found, top[NEIGHBOURS - 1].0)
         };
-        let mut state = (0, i64::MAX);
-        let (cx, cy) = self.cell_xy(p);
-        let rmax = self.gw.max(self.gh);
-        for r in 0..=rmax {
-            for y in (cy - r).max(0)..=(cy + r).min(self.gh - 1) {
-                let row = (y * self.gw) as usize;
+        for r in 0.. {
+            let (x0, x1) = ((cx - r).max(0), (cx + r).min(self.gw - 1));
+            let (y0, y1) = ((cy - r).max(0), (cy + r).min(self.gh - 1));
+            for y in y0..=y1 {
                 if y == cy - r || y == cy + r {
-                    for x in (cx - r).max(0)..=(cx + r).min(self.gw - 1) {
-                        state = consider(&self.grid[row + x as usize]);
+                    for x in x0..=x1 {
+                        visit(x, y, &mut top, &mut found);
                     }
                 } else {
                     for x in [cx - r, cx + r] {
                         if (0..self.gw).contains(&x) {
-                            state = consider(&self.grid[row + x as usize]);
+                            visit(x, y, &mut top, &mut found);
                         }
                     }
                 }
             }
-            let reach = r * self.cell;
-            if state.0 >= NEIGHBOURS && state.1 < reach * reach {
+            // Every cell not visited lies beyond a side of the rings that is not the grid's
+            // border; its points are at least that side's distance from p.
+            let mut beyond = i64::MAX;
+            if cx - r > 0 {
+                beyond = beyond.min(p[0] - (cx - r) * cell);
+            }
+            if cx + r < self.gw - 1 {
+                beyond = beyond.min((cx + r + 1) * cell - p[0]);
+            }
+            if cy - r > 0 {
+                beyond = beyond.min(p[1] - (cy - r) * cell);
+            }
+            if cy + r < self.gh - 1 {
+                beyond = beyond.min((cy + r + 1) * cell - p[1]);
+            }
+            if beyond == i64::MAX
+                || (found >= NEIGHBOURS && beyond > 0 && top[NEIGHBOURS - 1].0 < beyond * beyond)
+            {
                 break;
             }
         }
-        let taken = state.0.min(NEIGHBOURS);
-        best.extend(top.into_iter().take(taken));
+        top
     }
 }
 
@@ -439,17 +532,16 @@ impl State {
         })
     }
 
-    /// Codes one sample at `p`: `target` holds the coded-domain values to encode (ignored when
+    /// Codes the next sample of the level: `target` holds the coded-domain values to encode (ignored when
     /// decoding); returns the reconstructed coded-domain values in `recon`.
     fn code_sample<B: BitIo>(
         &mut self,
         io: &mut B,
-        p: [i64; 2],
         target: &[i32],
         recon: &mut [i32],
     ) -> Option<()> {
         let c = self.layout_channels;
-        self.pred.nearest(p, &mut self.nbrs);
+        self.pred.nearest_to_next(&mut self.nbrs);
         // Inverse squared distance weights, 2^62 / (d² + 2^12).
         let mut w = [0i128; NEIGHBOURS];
         let mut wsum = 0i128;
@@ -536,16 +628,15 @@ impl PredictiveEncoder {
                 positions.len()
             )));
         }
-        let end = self.state.pred.pos.len() + positions.len();
-        self.state.pred.begin_level(end);
+        self.state.pred.begin_level(positions);
         let mut rc = RangeEncoder::new();
         let mut target = [0i32; 4];
         let mut recon = [0i32; 4];
-        for (p, px) in positions.iter().zip(colours.chunks_exact(c)) {
+        for px in colours.chunks_exact(c) {
             forward(c, px, &mut target);
             self.state
-                .code_sample(&mut Enc(&mut rc), *p, &target[..c], &mut recon[..c]);
-            self.state.pred.push(*p, &recon[..c], self.state.last_mag);
+                .code_sample(&mut Enc(&mut rc), &target[..c], &mut recon[..c]);
+            self.state.pred.push(&recon[..c], self.state.last_mag);
         }
         Ok(rc.finish())
     }
@@ -565,8 +656,6 @@ impl PredictiveEncoder {
 /// A level being decoded.
 #[derive(Clone, Debug)]
 struct Level {
-    positions: Vec<[i64; 2]>,
-    next: usize,
     payload: Vec<u8>,
     payload_len: usize,
     rc: RangeDecoder,
@@ -592,11 +681,8 @@ impl PredictiveDecoder {
     /// Starts the next level: the fixed-point positions of its sites and its payload length.
     /// A level left unfinished is abandoned (its decoded samples stay).
     pub fn start_level(&mut self, positions: &[[i64; 2]], payload_len: usize) -> Result<(), Error> {
-        let end = self.state.pred.pos.len() + positions.len();
-        self.state.pred.begin_level(end);
+        self.state.pred.begin_level(positions);
         self.level = Some(Level {
-            positions: positions.to_vec(),
-            next: 0,
             payload: Vec::new(),
             payload_len,
             rc: RangeDecoder::new(),
@@ -625,8 +711,7 @@ impl PredictiveDecoder {
         let mut recon = [0i32; 4];
         let mut done = 0;
         self.state.model.logging = level.payload.len() < level.payload_len;
-        while level.next < level.positions.len() {
-            let p = level.positions[level.next];
+        while self.state.pred.next() < self.state.pred.level.len() {
             let saved = level.rc;
             self.state.model.log.clear();
             let mut io = Dec {
@@ -636,16 +721,15 @@ impl PredictiveDecoder {
             };
             if self
                 .state
-                .code_sample(&mut io, p, &[0; 4][..c], &mut recon[..c])
+                .code_sample(&mut io, &[0; 4][..c], &mut recon[..c])
                 .is_none()
             {
                 level.rc = saved;
                 self.state.model.undo();
                 break;
             }
-            self.state.pred.push(p, &recon[..c], self.state.last_mag);
+            self.state.pred.push(&recon[..c], self.state.last_mag);
             inverse(c, &recon[..c], out);
-            level.next += 1;
             done += 1;
         }
         self.state.model.log.clear();
@@ -674,31 +758,102 @@ mod tests {
         }
     }
 
+    /// Exact 4 nearest against brute force: random positions, positions on a coarse lattice
+    /// (many equal distances, duplicates), positions on the image border and the last level
+    /// abandoned half-way (its laid-out samples must not be found).
     #[test]
     fn nearest_matches_brute_force() {
-        let mut pr = Predictor::new(100, 60);
         let mut s = 12345u64;
         let mut rnd = |m: i64| {
             s = s.wrapping_mul(6364136223846793005).wrapping_add(1);
             ((s >> 33) as i64).rem_euclid(m)
         };
-        let mut got = Vec::new();
-        for level_end in [1usize, 2, 4, 8, 16, 64, 256, 1024] {
-            pr.begin_level(level_end);
-            while pr.pos.len() < level_end {
-                let p = [rnd(100 * 256), rnd(60 * 256)];
-                pr.nearest(p, &mut got);
-                let mut all: Vec<(i64, u32)> = pr
-                    .pos
-                    .iter()
-                    .enumerate()
-                    .map(|(i, q)| ((q[0] - p[0]).pow(2) + (q[1] - p[1]).pow(2), i as u32))
+        // The 4 nearest of p among the samples coded, by sorting them all.
+        let brute = |pr: &Predictor, p: [i64; 2]| {
+            let d2 = |q: &[i64; 2]| (q[0] - p[0]).pow(2) + (q[1] - p[1]).pow(2);
+            let mut all: Vec<(i64, u32)> = (pr.pos.iter().enumerate())
+                .map(|(i, q)| (d2(q), i as u32))
+                .collect();
+            all.sort_unstable();
+            all.truncate(NEIGHBOURS);
+            all
+        };
+        // 0, -4: positions on multiples of the grid's cell side, of a quarter of it (distances
+        // equal to the bound of a cell, or of the cells not visited).
+        for coarse in [1i64, 5 * 256, 19 * 256, 0, -4] {
+            let mut pr = Predictor::new(100, 60);
+            let mut unit = coarse;
+            let mut got = Vec::new();
+            for level_end in [1usize, 2, 4, 8, 16, 64, 256, 1024, 2000] {
+                let n = level_end - pr.pos.len();
+                // The grid depends on the count only.
+                pr.begin_level(&vec![[0, 0]; n]);
+                if coarse <= 0 {
+                    unit = pr.cell / coarse.abs().max(1);
+                }
+                let level: Vec<[i64; 2]> = (0..n)
+                    .map(|_| match rnd(8) {
+                        0 => [0, rnd(60 * 256)],
+                        1 => [100 * 256 - 1, rnd(60 * 256)],
+                        _ => [rnd(100 * 256) / unit * unit, rnd(60 * 256) / unit * unit],
+                    })
                     .collect();
-                all.sort_unstable();
-                all.truncate(NEIGHBOURS);
-                assert_eq!(got, all);
-                pr.push(p, &[0], 0);
+                pr.begin_level(&level);
+                // The last level is abandoned at half.
+                let take = if level_end == 2000 { n / 2 } else { n };
+                for &p in &level[..take] {
+                    pr.nearest_to_next(&mut got);
+                    assert_eq!(
+                        got,
+                        brute(&pr, p),
+                        "coarse {coarse}, sample {}",
+                        pr.pos.len()
+                    );
+                    pr.push(&[0], 0);
+                }
+            }
+            // Queries anywhere, also outside the image, after the abandoned level.
+            for _ in 0..500 {
+                let p = [rnd(140 * 256) - 20 * 256, rnd(100 * 256) - 20 * 256];
+                let p = p.map(|v| v / unit * unit);
+                let got: Vec<_> = (pr.nearest(p, pr.pos.len() as u32).into_iter())
+                    .take_while(|e| e.1 != u32::MAX)
+                    .collect();
+                assert_eq!(got, brute(&pr, p), "coarse {coarse}, query {p:?}");
             }
         }
+    }
+
+    /// A sample tied with the 4th nearest, with a smaller index, exactly at the distance
+    /// beyond which the search stops: it must be found.
+    #[test]
+    fn nearest_finds_a_tie_at_the_search_bound() {
+        let mut pr = Predictor::new(100, 60);
+        let n = 200;
+        pr.begin_level(&vec![[0, 0]; n]);
+        let c = pr.cell;
+        assert!(pr.gw > 6 && pr.gh > 7, "grid {}x{}", pr.gw, pr.gh);
+        // p in cell (3, 2); after the first ring the nearest side not visited is at x = 5c.
+        let p = [3 * c + c - c / 4, 2 * c + c / 2];
+        let d = 5 * c - p[0];
+        let mut level = vec![
+            [p[0] + d, p[1]], // index 0, in cell (5, 2)
+            [p[0] + 1, p[1]],
+            [p[0] - 1, p[1]],
+            [p[0], p[1] + 1],
+            [p[0] - d, p[1]], // index 4, as far, in a cell of the first ring
+        ];
+        while level.len() < n {
+            let k = level.len() as i64;
+            level.push([(k % 90) * 256, 59 * 256 - (k % 7) * 256]);
+        }
+        pr.begin_level(&level);
+        for _ in &level {
+            pr.push(&[0], 0);
+        }
+        assert_eq!(
+            pr.nearest(p, n as u32),
+            [(1, 1), (1, 2), (1, 3), (d * d, 0)]
+        );
     }
 }

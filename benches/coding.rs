@@ -1,0 +1,92 @@
+//! The predictive colour coding alone (no container, no rendering), one core: encoding and
+//! decoding every level of 16k, 65k and 262k samples of `assets/rocket.png` resized to
+//! 1024 × 1024, at the encoder's default quality (75). Levels double from 127 samples, as in a
+//! file; colours are the pixels at the sites.
+//!
+//! Run: `cargo bench --bench coding -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
+use image::imageops::FilterType;
+use qcs::coding::predictive::{fixed_position, Params, PredictiveDecoder, PredictiveEncoder};
+use qcs::sites::Quasicrystal;
+
+const SIDE: u32 = 1024;
+const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
+
+/// Level `k` holds samples `ends[k - 1]..ends[k]`: 127, then doubling.
+fn level_ends(n: usize) -> Vec<usize> {
+    let mut ends = vec![127.min(n)];
+    while *ends.last().expect("one level") < n {
+        ends.push((ends.last().expect("one level") * 2).min(n));
+    }
+    ends
+}
+
+fn bench(c: &mut Criterion) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
+    let img = image::open(path).expect("assets/rocket.png");
+    let img = img.resize_exact(SIDE, SIDE, FilterType::Triangle).to_rgb8();
+    let q = Quasicrystal::new(SIDE, SIDE).expect("frame");
+    let params = Params::from_quality(75);
+    let mut g = c.benchmark_group("predictive_1mpx");
+    g.sample_size(10);
+    for n in COUNTS {
+        let sites = q.first(n);
+        let pos: Vec<[i64; 2]> = sites
+            .iter()
+            .map(|s| fixed_position(&q.frame(), s.lattice))
+            .collect();
+        let rgb: Vec<u8> = sites
+            .iter()
+            .flat_map(|s| {
+                let x = (s.pos[0] as u32).min(SIDE - 1);
+                let y = (s.pos[1] as u32).min(SIDE - 1);
+                img.get_pixel(x, y).0
+            })
+            .collect();
+        let ends = level_ends(n);
+        let encode = || {
+            let mut enc = PredictiveEncoder::new(params, 3, SIDE, SIDE).expect("encoder");
+            let mut start = 0;
+            let mut payloads = Vec::new();
+            for &end in &ends {
+                let level = enc.encode_level(&pos[start..end], &rgb[start * 3..end * 3]);
+                payloads.push(level.expect("level"));
+                start = end;
+            }
+            payloads
+        };
+        let payloads = encode();
+        let bytes: usize = payloads.iter().map(Vec::len).sum();
+        eprintln!("{n} samples: {bytes} payload bytes");
+        g.throughput(Throughput::Elements(n as u64));
+        g.bench_function(BenchmarkId::new("encode", n), |b| {
+            b.iter(|| black_box(encode()))
+        });
+        g.bench_function(BenchmarkId::new("decode", n), |b| {
+            b.iter(|| {
+                let mut dec = PredictiveDecoder::new(params, 3, SIDE, SIDE).expect("decoder");
+                let mut out = Vec::with_capacity(n * 3);
+                let mut start = 0;
+                for (&end, payload) in ends.iter().zip(&payloads) {
+                    dec.start_level(&pos[start..end], payload.len())
+                        .expect("level");
+                    dec.push(payload, &mut out).expect("payload");
+                    start = end;
+                }
+                assert_eq!(out.len(), n * 3);
+                black_box(out)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+
+fn main() {
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}
