@@ -1,7 +1,7 @@
 //! The predictive colour coding alone (no container, no rendering), one core: encoding and
 //! decoding every level of 16k, 65k and 262k samples of `assets/rocket.png` resized to
-//! 1024 × 1024, at the encoder's default quality (75). Levels double from 127 samples, as in a
-//! file; colours are the pixels at the sites.
+//! 1024 × 1024, at the encoder's default quality (75). Levels as in a file (the header's
+//! schedule, first level 127); colours are the pixels at the sites.
 //!
 //! Run: `cargo bench --bench coding -- --warm-up-time 1 --measurement-time 3`
 
@@ -10,19 +10,11 @@ use std::hint::black_box;
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use image::imageops::FilterType;
 use qcs::coding::predictive::{fixed_position, Params, PredictiveDecoder, PredictiveEncoder};
+use qcs::container::{Header, Layout};
 use qcs::sites::Quasicrystal;
 
 const SIDE: u32 = 1024;
 const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
-
-/// Level `k` holds samples `ends[k - 1]..ends[k]`: 127, then doubling.
-fn level_ends(n: usize) -> Vec<usize> {
-    let mut ends = vec![127.min(n)];
-    while *ends.last().expect("one level") < n {
-        ends.push((ends.last().expect("one level") * 2).min(n));
-    }
-    ends
-}
 
 fn bench(c: &mut Criterion) {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
@@ -46,15 +38,17 @@ fn bench(c: &mut Criterion) {
                 img.get_pixel(x, y).0
             })
             .collect();
-        let ends = level_ends(n);
+        let header = Header::new(SIDE, SIDE, Layout::Rgb, n as u64, 127, params.coding());
+        let levels: Vec<(usize, usize)> = (0..header.level_count())
+            .filter_map(|k| header.level_range(k))
+            .map(|r| (r.start as usize, r.end as usize))
+            .collect();
         let encode = || {
             let mut enc = PredictiveEncoder::new(params, 3, SIDE, SIDE).expect("encoder");
-            let mut start = 0;
             let mut payloads = Vec::new();
-            for &end in &ends {
-                let level = enc.encode_level(&pos[start..end], &rgb[start * 3..end * 3]);
+            for &(s, e) in &levels {
+                let level = enc.encode_level(&pos[s..e], &rgb[s * 3..e * 3]);
                 payloads.push(level.expect("level"));
-                start = end;
             }
             payloads
         };
@@ -69,12 +63,9 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 let mut dec = PredictiveDecoder::new(params, 3, SIDE, SIDE).expect("decoder");
                 let mut out = Vec::with_capacity(n * 3);
-                let mut start = 0;
-                for (&end, payload) in ends.iter().zip(&payloads) {
-                    dec.start_level(&pos[start..end], payload.len())
-                        .expect("level");
+                for (&(s, e), payload) in levels.iter().zip(&payloads) {
+                    dec.start_level(&pos[s..e], payload.len()).expect("level");
                     dec.push(payload, &mut out).expect("payload");
-                    start = end;
                 }
                 assert_eq!(out.len(), n * 3);
                 black_box(out)

@@ -182,10 +182,10 @@ impl RangeEncoder {
 /// length reads as 0x00. Where bytes are missing the code value is only known to lie in an
 /// interval: its low end `lo` reads the missing bytes as 0x00, its high end reads them as 0xFF.
 /// A bit is decoded only when both ends give it and the high end is below `range` (as a valid
-/// payload's code always is), so no byte still to come can change it, whatever the payload. Missing bytes are always the
-/// newest ones in the code window; when they arrive, `lo` takes their values. A decode that
-/// cannot be decided returns `None` and leaves the decoder unusable until restored from a copy
-/// (it is `Copy`, so callers snapshot it).
+/// payload's code always is), so no byte still to come can change it, whatever the payload.
+/// Missing bytes are always the newest ones in the code window; when they arrive, `lo` takes
+/// their values. A decode that cannot be decided returns `None` and leaves the decoder unusable
+/// until restored from a copy (it is `Copy`, so callers snapshot it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RangeDecoder {
     range: u32,
