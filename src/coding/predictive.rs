@@ -542,11 +542,12 @@ impl State {
     ) -> Option<()> {
         let c = self.layout_channels;
         self.pred.nearest_to_next(&mut self.nbrs);
-        // Inverse squared distance weights, 2^62 / (d² + 2^12).
-        let mut w = [0i128; NEIGHBOURS];
-        let mut wsum = 0i128;
+        // Inverse squared distance weights, 2^62 / (d² + 2^12): each at most 2^50, so with
+        // values within ±255 the weighted sum below stays under 2^61 in i64.
+        let mut w = [0i64; NEIGHBOURS];
+        let mut wsum = 0i64;
         for (k, &(d2, _)) in self.nbrs.iter().enumerate() {
-            w[k] = (1i128 << 62) / (d2 as i128 + (1 << 12));
+            w[k] = (1i64 << 62) / d2.saturating_add(1 << 12);
             wsum += w[k];
         }
         let per_channel = ACT * LUMA_CLASSES * PER_CTX + ACT * MANT_PER_ACT;
@@ -556,11 +557,11 @@ impl State {
             let (pred, spread) = if self.nbrs.is_empty() {
                 ((lo + hi + 1) / 2, 0)
             } else {
-                let mut acc = 0i128;
+                let mut acc = 0i64;
                 let (mut mn, mut mx) = (i32::MAX, i32::MIN);
                 for (k, &(_, i)) in self.nbrs.iter().enumerate() {
                     let v = self.pred.values[i as usize * c + ch];
-                    acc += w[k] * v as i128;
+                    acc += w[k] * v as i64;
                     mn = mn.min(v);
                     mx = mx.max(v);
                 }
