@@ -215,15 +215,18 @@ struct Predictor {
     /// order, so the coded ones come first.
     start: Vec<u32>,
     entries: Vec<([i64; 2], u32)>,
-    /// The level being coded: its positions, and the nearest earlier samples of its samples
-    /// `batch..batch + near.len()` (found in batches, in grid order, for locality).
+    /// The level being coded: its positions, their numbers within the level in grid order,
+    /// and the nearest earlier samples of its samples `batch..batch + near.len()` (found in
+    /// batches, in grid order, for locality).
     level: Vec<[i64; 2]>,
+    order: Vec<u32>,
     near: Vec<[(i64, u32); NEIGHBOURS]>,
     batch: usize,
 }
 
-/// Samples of a level whose nearest earlier samples are found at once.
-const BATCH: usize = 1 << 14;
+/// Samples of a level whose nearest earlier samples are found at once (few in unit tests, so
+/// that their levels span several batches).
+const BATCH: usize = if cfg!(test) { 100 } else { 1 << 14 };
 
 impl Predictor {
     fn new(width: u32, height: u32) -> Self {
@@ -239,6 +242,7 @@ impl Predictor {
             start: Vec::new(),
             entries: Vec::new(),
             level: Vec::new(),
+            order: Vec::new(),
             near: Vec::new(),
             batch: 0,
         }
@@ -271,6 +275,14 @@ impl Predictor {
             self.entries[fill[k] as usize] = (p, i as u32);
             fill[k] += 1;
         }
+        let base = self.pos.len() as u32;
+        self.order.clear();
+        self.order.extend(
+            self.entries
+                .iter()
+                .filter(|e| e.1 >= base)
+                .map(|e| e.1 - base),
+        );
         self.level.clear();
         self.level.extend_from_slice(level);
         self.near.clear();
@@ -291,15 +303,18 @@ impl Predictor {
             // The next batch, in grid order: neighbouring queries read neighbouring cells.
             self.batch = j;
             let end = (j + BATCH).min(self.level.len());
-            let mut order: Vec<(usize, usize)> =
-                (j..end).map(|j| (self.cell_of(self.level[j]), j)).collect();
-            order.sort_unstable();
             self.near.clear();
             self.near
                 .resize(end - j, [(i64::MAX, u32::MAX); NEIGHBOURS]);
-            for (_, k) in order {
+            let order = std::mem::take(&mut self.order);
+            for k in order
+                .iter()
+                .map(|&k| k as usize)
+                .filter(|k| (j..end).contains(k))
+            {
                 self.near[k - j] = self.nearest(self.level[k], (base + k) as u32);
             }
+            self.order = order;
         }
         best.clear();
         let near = &self.near[j - self.batch];
