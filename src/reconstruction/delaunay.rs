@@ -216,8 +216,9 @@ impl Locator {
     }
 
     fn bucket(&self, p: [f64; 2]) -> usize {
+        // Truncation is the floor here: below 0 the clamp gives 0 either way.
         let f = |k: usize| {
-            let v = ((p[k] - self.origin[k]) * self.inv).floor();
+            let v = (p[k] - self.origin[k]) * self.inv;
             v.clamp(0.0, self.side as f64 - 1.0) as usize
         };
         f(1) * self.side + f(0)
@@ -313,6 +314,7 @@ impl LiveCells {
     pub(crate) fn extend(&mut self, lattice: &[Option<ZZeta>]) -> Result<(), Rebuild> {
         let new = lattice.len().saturating_sub(self.points);
         let mut touched = Vec::with_capacity(8 * new);
+        let mut stack = Vec::new();
         let mut round: Vec<u64> = Vec::new();
         self.store.reserve(new);
         self.mesh.reserve(2 * new);
@@ -331,7 +333,7 @@ impl LiveCells {
             for &key in &round {
                 let i = key as u32;
                 if let Some(x) = lattice[i as usize] {
-                    self.insert(i, x, &mut touched)?;
+                    self.insert(i, x, &mut touched, &mut stack)?;
                 }
             }
             if self.store.len() > 2 * self.locator.sized_for {
@@ -368,7 +370,14 @@ impl LiveCells {
     }
 
     /// Inserts point `i` at `x`: locate, split, flip.
-    fn insert(&mut self, i: u32, x: ZZeta, touched: &mut Vec<u32>) -> Result<(), Rebuild> {
+    /// `stack` is scratch space (the edges left to test), kept from one insertion to the next.
+    fn insert(
+        &mut self,
+        i: u32,
+        x: ZZeta,
+        touched: &mut Vec<u32>,
+        stack: &mut Vec<(u32, u8)>,
+    ) -> Result<(), Rebuild> {
         let p = self.store.push(x, i);
         let (m, s) = (&mut self.mesh, &self.store);
         // Visibility walk from a triangle of a vertex near the point.
@@ -412,7 +421,7 @@ impl LiveCells {
             }
             break Ok(o);
         };
-        let mut stack: Vec<(u32, u8)> = Vec::new();
+        stack.clear();
         // How many of the orientations are zero, and the slot of the first zero (or the
         // hull edge the point is beyond).
         let (zeros, k) = match side {
@@ -488,7 +497,7 @@ impl LiveCells {
         // The triangles made or rewritten (each on the stack with its edge facing away from
         // the new point): no merge flag yet, cocircularity to be tested again.
         self.merge.resize(m.tri.len(), [false; 3]);
-        for &(t, _) in &stack {
+        for &(t, _) in stack.iter() {
             self.merge[t as usize] = [false; 3];
             touched.push(t);
         }
