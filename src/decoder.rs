@@ -1,5 +1,7 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
+use std::sync::Arc;
+
 use crate::coding::predictive::{fixed_position, Params, PredictiveDecoder};
 use crate::coding::raw::RawUnpacker;
 use crate::container::{
@@ -75,8 +77,10 @@ pub struct StreamDecoder {
     limits: Limits,
     header: Option<Header>,
     seq: Option<Quasicrystal>,
-    /// Sites with their exact lattice points (Gouraud draws the canonical Delaunay cells).
-    sites: Vec<Site>,
+    /// The first sites with their exact lattice points (Gouraud draws the canonical Delaunay
+    /// cells), as many as were needed so far or more; shared with the thread that builds the
+    /// cells of a one-shot decode.
+    sites: Arc<Vec<Site>>,
     /// Decoded colours of the available samples, `channels` bytes each.
     colours: Vec<u8>,
     verified: u64,
@@ -107,7 +111,7 @@ impl StreamDecoder {
             events: Vec::new(),
             header: None,
             seq: None,
-            sites: Vec::new(),
+            sites: Arc::default(),
             colours: Vec::new(),
             verified: 0,
             levels_complete: 0,
@@ -212,11 +216,11 @@ impl StreamDecoder {
                         samples.end - samples.start,
                     )?),
                     Coding::Predictive { .. } => {
-                        let seq = self.seq.expect("header precedes levels");
-                        let fixed: Vec<_> = seq.first(samples.end as usize)
+                        let frame = self.seq.expect("header precedes levels").frame();
+                        let fixed: Vec<_> = self.sites_to(samples.end as usize)
                             [samples.start as usize..]
                             .iter()
-                            .map(|s| fixed_position(&seq.frame(), s.lattice))
+                            .map(|s| fixed_position(&frame, s.lattice))
                             .collect();
                         if let Some(p) = &mut self.predictive {
                             p.start_level(&fixed, *payload_len as usize)?;
@@ -303,15 +307,21 @@ impl StreamDecoder {
     /// the first `k` available samples, e.g. for the stylized renderers.
     pub fn samples(&mut self, k: u64) -> (&[Site], &[u8]) {
         let k = k.min(self.sample_count()) as usize;
+        self.sites_to(k);
+        let c = self.channels();
+        (&self.sites[..k], &self.colours[..k * c])
+    }
+
+    /// The first `k` sites (`k` at most the header's sample count), computed if not yet known.
+    fn sites_to(&mut self, k: usize) -> &[Site] {
         if self.sites.len() < k {
-            let seq = self.seq.expect("samples imply a header");
+            let seq = self.seq.expect("sites imply a header");
             let total = self.header.as_ref().map_or(0, |h| h.total_samples) as usize;
             // Grow geometrically: total work stays O(n log n) however the bytes arrive.
             let target = k.max(2 * self.sites.len()).min(total).max(k);
-            self.sites = seq.first(target);
+            self.sites = Arc::new(seq.first(target));
         }
-        let c = self.channels();
-        (&self.sites[..k], &self.colours[..k * c])
+        &self.sites[..k]
     }
 
     /// Renders the picture from every sample received so far, at `width × height`.
@@ -491,26 +501,24 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
         ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover),
     );
     let max_samples = opts.max_samples.unwrap_or(u64::MAX);
-    let seed = if opts.method == Method::Gouraud && rayon::current_num_threads() > 1 {
-        push_building_cells(&mut dec, bytes, max_samples)?
-    } else {
-        dec.push(bytes)?;
-        None
-    };
+    let build_cells = opts.method == Method::Gouraud && rayon::current_num_threads() > 1;
+    let seed = push_whole(&mut dec, bytes, max_samples, build_cells)?;
     let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
     let (w, ht) = opts.size.unwrap_or((h.width, h.height));
     let k = max_samples.min(dec.samples_available());
     dec.render_prefix(k, opts.method, w, ht, seed)
 }
 
-/// Pushes `bytes` (a whole buffer) into the fresh decoder `dec` while, on another thread of the
-/// pool, the cells of the samples that are surely there (those of the verified levels, at most
+/// Pushes `bytes` (a whole buffer) into the fresh decoder `dec`, the sites of the levels
+/// present computed once up front. If `build_cells`, meanwhile, on another thread of the pool,
+/// the cells of the samples that are surely there (those of the verified levels, at most
 /// `max_samples`) are built: the cells depend only on the header, so they need not wait for
 /// the colours. The header goes first, so that its limits hold before any work.
-fn push_building_cells(
+fn push_whole(
     dec: &mut StreamDecoder,
     bytes: &[u8],
     max_samples: u64,
+    build_cells: bool,
 ) -> Result<Option<CellSeed>> {
     let head = Header::parse(bytes).map_or(0, |(_, len)| len);
     dec.push(&bytes[..head])?;
@@ -518,25 +526,32 @@ fn push_building_cells(
         dec.push(&bytes[head..])?;
         return Ok(None);
     };
-    let sure = crate::container::inspect(bytes)
-        .samples_verified
-        .min(max_samples)
+    let found = crate::container::inspect(bytes);
+    let present = (found.levels.iter())
+        .filter(|l| l.chunk.is_some())
+        .map(|l| l.samples.end)
+        .max()
+        .unwrap_or(0)
         .min(h.total_samples) as usize;
+    // The levels' colours need their sites' positions, the cells the sites.
+    dec.sites = Arc::new(seq.first(present));
+    if !build_cells {
+        dec.push(&bytes[head..])?;
+        return Ok(None);
+    }
+    let sure = found.samples_verified.min(max_samples).min(present as u64) as usize;
     let mut set = dec.new_set(&h);
     let blank = vec![0; dec.channels()];
-    let (pushed, (sites, seed)) = rayon::join(
+    let sites = Arc::clone(&dec.sites);
+    let (pushed, seed) = rayon::join(
         || dec.push(&bytes[head..]),
         move || {
-            let sites = seq.first(sure);
-            for s in &sites {
+            for s in &sites[..sure] {
                 push_site(&mut set, s, &blank);
             }
-            (sites, set.into_seed())
+            set.into_seed()
         },
     );
     pushed?;
-    if dec.sites.len() < sites.len() {
-        dec.sites = sites;
-    }
     Ok(seed)
 }
