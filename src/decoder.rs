@@ -317,8 +317,9 @@ impl StreamDecoder {
         if self.sites.len() < k {
             let seq = self.seq.expect("sites imply a header");
             let total = self.header.as_ref().map_or(0, |h| h.total_samples) as usize;
-            // Grow geometrically: total work stays O(n log n) however the bytes arrive.
-            let target = k.max(2 * self.sites.len()).min(total).max(k);
+            // Grow geometrically: total work stays O(n log n) however the bytes arrive. Twice
+            // what is asked: levels double, so the next level's sites come with this one's.
+            let target = (2 * k).max(2 * self.sites.len()).min(total).max(k);
             self.sites = Arc::new(seq.first(target));
         }
         &self.sites[..k]
