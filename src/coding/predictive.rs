@@ -215,9 +215,10 @@ struct Predictor {
     /// order, so the coded ones come first.
     start: Vec<u32>,
     entries: Vec<([i64; 2], u32)>,
-    /// The level being coded: its positions, their numbers within the level in grid order,
-    /// and the nearest earlier samples of its samples `batch..batch + near.len()` (found in
-    /// batches, in grid order, for locality).
+    /// The level being coded: its positions, their numbers within the level batch by batch
+    /// (`order[b·BATCH..]` holds batch `b`'s, in grid order), and the nearest earlier samples
+    /// of its samples `batch..batch + near.len()` (found a batch at a time, in grid order, for
+    /// locality).
     level: Vec<[i64; 2]>,
     order: Vec<u32>,
     near: Vec<[(i64, u32); NEIGHBOURS]>,
@@ -275,14 +276,19 @@ impl Predictor {
             self.entries[fill[k] as usize] = (p, i as u32);
             fill[k] += 1;
         }
+        // Every batch but the last holds BATCH samples: batch b starts at b·BATCH.
         let base = self.pos.len() as u32;
         self.order.clear();
-        self.order.extend(
-            self.entries
-                .iter()
-                .filter(|e| e.1 >= base)
-                .map(|e| e.1 - base),
-        );
+        self.order.resize(level.len(), 0);
+        let mut slot: Vec<usize> = (0..level.len().div_ceil(BATCH))
+            .map(|b| b * BATCH)
+            .collect();
+        for &(_, i) in self.entries.iter().filter(|e| e.1 >= base) {
+            let k = i - base;
+            let b = k as usize / BATCH;
+            self.order[slot[b]] = k;
+            slot[b] += 1;
+        }
         self.level.clear();
         self.level.extend_from_slice(level);
         self.near.clear();
@@ -301,20 +307,16 @@ impl Predictor {
         let j = self.next();
         if j >= self.batch + self.near.len() {
             // The next batch, in grid order: neighbouring queries read neighbouring cells.
+            debug_assert_eq!(j % BATCH, 0, "batches start at multiples of BATCH");
             self.batch = j;
             let end = (j + BATCH).min(self.level.len());
             self.near.clear();
             self.near
                 .resize(end - j, [(i64::MAX, u32::MAX); NEIGHBOURS]);
-            let order = std::mem::take(&mut self.order);
-            for k in order
-                .iter()
-                .map(|&k| k as usize)
-                .filter(|k| (j..end).contains(k))
-            {
+            for n in j..end {
+                let k = self.order[n] as usize;
                 self.near[k - j] = self.nearest(self.level[k], (base + k) as u32);
             }
-            self.order = order;
         }
         best.clear();
         let near = &self.near[j - self.batch];
