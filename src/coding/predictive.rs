@@ -549,8 +549,8 @@ impl State {
         })
     }
 
-    /// Codes the next sample of the level: `target` holds the coded-domain values to encode (ignored when
-    /// decoding); returns the reconstructed coded-domain values in `recon`.
+    /// Codes the next sample of the level: `target` holds the coded-domain values to encode
+    /// (ignored when decoding); returns the reconstructed coded-domain values in `recon`.
     fn code_sample<B: BitIo>(
         &mut self,
         io: &mut B,
