@@ -447,7 +447,6 @@ impl LiveCells {
                 m.nbr[t] = [NONE, t2, t_ab];
                 m.push([a, p, c], [NONE, t_ca, t1]);
                 m.relink(t_ca, t1, t2);
-                m.touch(t1);
                 stack.extend([(t1, 2), (t2, 1)]);
             }
             Some(0) => {
@@ -460,7 +459,6 @@ impl LiveCells {
                 m.push([a, b, p], [t1, t2, nc]);
                 m.relink(nb, t1, t2);
                 m.relink(nc, t1, t3);
-                m.touch(t1);
                 stack.extend([(t1, 2), (t2, 2), (t3, 2)]);
             }
             Some(1) => {
@@ -483,8 +481,6 @@ impl LiveCells {
                 m.push([d, p, b], [t1, u_bd, u1]);
                 m.relink(t_ca, t1, t2);
                 m.relink(u_bd, u1, u2);
-                m.touch(t1);
-                m.touch(u1);
                 stack.extend([(t1, 2), (t2, 1), (u1, 2), (u2, 1)]);
             }
             Some(_) => {
@@ -500,6 +496,10 @@ impl LiveCells {
         for &(t, _) in stack.iter() {
             self.merge[t as usize] = [false; 3];
             touched.push(t);
+        }
+        // Every triangle on the stack has p, and keeps it through the flips below.
+        if let Some(&(t, _)) = stack.first() {
+            m.hint(p, t);
         }
         self.locator.buckets[b] = p;
         // Lawson flips around the new point.
@@ -539,7 +539,8 @@ struct Mesh {
     tri: Vec<[u32; 3]>,
     nbr: Vec<[u32; 3]>,
     alive: Vec<bool>,
-    /// Per vertex: a live triangle that has it, or `NONE`.
+    /// Per vertex: a triangle that had it when it was recorded, or `NONE`. A walk may start
+    /// anywhere (it checks that the triangle is alive); one near the point is quicker.
     vtri: Vec<u32>,
 }
 
@@ -584,20 +585,20 @@ impl Mesh {
         self.vtri = vec![NONE; vertices];
         for t in 0..self.tri.len() {
             if self.alive[t] {
-                self.touch(t as u32);
+                for v in self.tri[t] {
+                    self.hint(v, t as u32);
+                }
             }
         }
     }
 
-    /// Records `t` as the triangle of each of its vertices.
-    fn touch(&mut self, t: u32) {
-        for v in self.tri[t as usize] {
-            let v = v as usize;
-            if v >= self.vtri.len() {
-                self.vtri.resize(v + 1, NONE);
-            }
-            self.vtri[v] = t;
+    /// Records `t`, a triangle that has vertex `v` now, as where to start a walk near `v`.
+    fn hint(&mut self, v: u32, t: u32) {
+        let v = v as usize;
+        if v >= self.vtri.len() {
+            self.vtri.resize(v + 1, NONE);
         }
+        self.vtri[v] = t;
     }
 
     /// The hull edge next to the hull edge opposite vertex `k` of `t`, counter-clockwise
@@ -677,7 +678,6 @@ impl Mesh {
         self.tri.push(tri);
         self.nbr.push(nbr);
         self.alive.push(true);
-        self.touch(self.tri.len() as u32 - 1);
     }
 
     /// The neighbour across the edge opposite vertex `i` of `t`: its slot `j` for that edge
@@ -728,8 +728,6 @@ impl Mesh {
         self.nbr[u as usize] = [nu_b, nt_b, t];
         self.relink(nu_c, u, t);
         self.relink(nt_b, t, u);
-        self.touch(t);
-        self.touch(u);
         Some((t, u))
     }
 
