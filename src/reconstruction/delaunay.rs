@@ -34,6 +34,15 @@ struct Store {
     st: Vec<[f64; 3]>,
     /// Internal id → point index.
     ext: Vec<u32>,
+    /// A box holding every cached position (it may hold the origin too), the largest error
+    /// bound of one, and from them an error bound of [`orient_f`] that holds for any three
+    /// points of the store (its bound grows with the points' spread and cached error; this
+    /// takes the largest of both). An orientation beyond it has its sign without the bound
+    /// of its own points, which most do. (The same for the incircle test decides too few.)
+    lo: [f64; 2],
+    hi: [f64; 2],
+    hmax: f64,
+    quick_orient: f64,
 }
 
 /// `max` without `f64::max`'s NaN handling (no NaN arises here).
@@ -66,10 +75,14 @@ fn orient_f(pa: [f64; 3], pb: [f64; 3], pc: [f64; 3]) -> (f64, f64) {
     // difference add ≤ 3ε·M². Doubled for margin.
     let mm = fmax(fmax(px.abs(), py.abs()), fmax(qx.abs(), qy.abs()));
     let h = pa[2] + fmax(pb[2], pc[2]) + EPS * mm;
-    (
-        det,
-        2.0 * (4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * mm * mm),
-    )
+    (det, orient_err(mm, h))
+}
+
+/// The error bound of [`orient_f`] for differences up to `mm` that err by up to `h`
+/// (increasing in both).
+#[inline(always)]
+fn orient_err(mm: f64, h: f64) -> f64 {
+    2.0 * (4.0 * mm * h + 2.0 * h * h + 3.0 * EPS * mm * mm)
 }
 
 /// The incircle determinant of cached points and a bound on its error.
@@ -109,10 +122,29 @@ fn norm_says_zero(f: f64, err: f64, g: f64, gerr: f64) -> bool {
 
 impl Store {
     fn push(&mut self, x: ZZeta, ext: u32) -> u32 {
+        let c = cached(x);
         self.zz.push(x);
-        self.xy.push(cached(x));
+        self.xy.push(c);
         self.st.push(cached(x.star()));
         self.ext.push(ext);
+        let grows = c[0] < self.lo[0]
+            || c[1] < self.lo[1]
+            || c[0] > self.hi[0]
+            || c[1] > self.hi[1]
+            || c[2] > self.hmax;
+        if grows {
+            for k in 0..2 {
+                self.lo[k] = self.lo[k].min(c[k]);
+                self.hi[k] = self.hi[k].max(c[k]);
+            }
+            self.hmax = self.hmax.max(c[2]);
+            // Any computed difference of two coordinates is at most the box's side, which
+            // its own rounding may understate by a relative 2^-53; the margin covers both.
+            let mm = fmax(self.hi[0] - self.lo[0], self.hi[1] - self.lo[1]) * (1.0 + 1e-9);
+            // The largest `h` of the bound: two cached errors and the rounding of a
+            // difference.
+            self.quick_orient = orient_err(mm, 2.0 * self.hmax + EPS * mm);
+        }
         self.zz.len() as u32 - 1
     }
 
@@ -141,6 +173,9 @@ impl Store {
     fn orient(&self, a: u32, b: u32, c: u32) -> i32 {
         let [a, b, c] = [a, b, c].map(|i| i as usize);
         let (det, bound) = orient_f(self.xy[a], self.xy[b], self.xy[c]);
+        if det.abs() > self.quick_orient {
+            return if det > 0.0 { 1 } else { -1 };
+        }
         if det > bound {
             1
         } else if det < -bound {
