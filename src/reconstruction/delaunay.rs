@@ -169,7 +169,7 @@ impl Store {
     /// Exact orientation of `a, b, c` (as [`crate::lattice::orient`]): decided from the
     /// cached positions unless they are within their error bound of collinear, then from
     /// the star images' ([`norm_says_zero`]), then exactly.
-    #[inline]
+    #[inline(always)]
     fn orient(&self, a: u32, b: u32, c: u32) -> i32 {
         let [a, b, c] = [a, b, c].map(|i| i as usize);
         let (det, bound) = orient_f(self.xy[a], self.xy[b], self.xy[c]);
