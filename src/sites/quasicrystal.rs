@@ -243,7 +243,7 @@ impl Quasicrystal {
                     let k = order_key(point(c.1).star().norm2()).max(0) as u128;
                     c.0 = (k >> shift).min(u64::MAX as u128) as u64;
                 }
-                radsort::sort_by_key(&mut cand, |c| c.0);
+                cand.sort_unstable_by_key(|c| c.0);
                 let mut start = 0;
                 while start < count {
                     let mut end = start + 1;
