@@ -26,15 +26,6 @@ const J2K: [(u64, f64); 5] = [
     (8192, 28.13),
 ];
 
-fn psnr(a: &[u8], b: &[u8]) -> f64 {
-    let se: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(&x, &y)| (x as f64 - y as f64).powi(2))
-        .sum();
-    10.0 * (255.0f64 * 255.0 * a.len() as f64 / se.max(1e-9)).log10()
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let paths: Vec<String> = std::env::args().skip(1).collect();
     let opts = EncodeOptions {
@@ -55,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     ..Default::default()
                 },
             )?;
-            let p = psnr(&d.image.to_rgb8().into_raw(), rgb.as_raw());
+            let p = qcs::eval::psnr_bytes(&d.image.to_rgb8().into_raw(), rgb.as_raw())?;
             println!("{path},{n},{p:.2}");
             *m += p / paths.len().max(1) as f64;
         }
