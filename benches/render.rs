@@ -14,12 +14,13 @@
 //! `render_1mpx_single/raster_only` is `rasterise` on spade's triangles (prepared once, with
 //! the painted mask it returns); `gouraud` is the whole render from the sample set: point
 //! and triangle set-up, binning, rasterising, the outside-the-hull rule (nothing to do here:
-//! the hull of the samples and mirror points holds the picture, so no mask is kept).
+//! the hull of the samples and mirror points holds the picture, so no mask is kept); `cubic`
+//! the same with the cubic patches (gradients estimated, then a patch per triangle).
 //!
 //! Instruction counts (stable on a loaded machine): `QCS_ONCE=<workload>` runs one workload a
 //! fixed number of times instead of criterion, e.g.
 //! `QCS_ONCE=gouraud:65536 valgrind --tool=callgrind --toggle-collect='*render_with*' target/release/deps/render-*`
-//! (workloads: `gouraud:N`, `shepard:N`, `natural:N`, `raster:N`).
+//! (workloads: `gouraud:N`, `cubic:N`, `shepard:N`, `natural:N`, `raster:N`).
 
 use std::hint::black_box;
 use std::io::Cursor;
@@ -150,6 +151,9 @@ fn bench(c: &mut Criterion) {
         ras.bench_function(BenchmarkId::new("gouraud", n), |b| {
             b.iter(|| black_box(set.render_with(Method::Gouraud, SIDE, SIDE, single)))
         });
+        ras.bench_function(BenchmarkId::new("cubic", n), |b| {
+            b.iter(|| black_box(set.render_with(Method::Cubic, SIDE, SIDE, single)))
+        });
         ras.bench_function(BenchmarkId::new("shepard", n), |b| {
             b.iter(|| black_box(set.render_with(Method::Shepard, SIDE, SIDE, single)))
         });
@@ -215,6 +219,7 @@ fn once(spec: &str) {
         "gouraud" => Method::Gouraud,
         "shepard" => Method::Shepard,
         "natural" => Method::Natural,
+        "cubic" => Method::Cubic,
         "raster" => {
             let tris = {
                 let cols = set.colours().to_vec();

@@ -2,12 +2,14 @@
 //!
 //! ```text
 //! cargo run --release --example rd -- [--quality Q | --lossless] [--density D] [--first L0]
-//!     [--colour progressive|area|nearest|bilinear] IMAGE...
+//!     [--colour progressive|area|nearest|bilinear] [--method gouraud|cubic|shepard|natural]
+//!     IMAGE...
 //! ```
 //!
 //! Defaults: predictive coding at quality 50, density 1/4, first level 127 (the README's table).
 //!
-//! For each image: the PSNR (dB, MSE pooled over R, G, B) of the full-size Gouraud render of the
+//! For each image: the PSNR (dB, MSE pooled over R, G, B) of the full-size render (Gouraud
+//! unless `--method` says otherwise) of the
 //! first B bytes of the qcs file, B = 32, 64, …, 8192 and the whole file; and the same for a
 //! progressive JPEG (jpeg-encoder, quality 75) decoded cut with `image` (zune-jpeg). A cut that
 //! does not decode counts as flat grey (128). Prints CSV rows, then the mean over the images as
@@ -25,23 +27,16 @@ const RD_QUALITY: u8 = 50;
 const BUDGETS: [usize; 9] = [32, 64, 128, 256, 512, 1024, 2048, 4096, 8192];
 
 fn psnr(a: &[u8], b: &[u8]) -> f64 {
-    let se: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(&x, &y)| (x as f64 - y as f64).powi(2))
-        .sum();
-    let mse = se / a.len() as f64;
-    if mse == 0.0 {
-        100.0
-    } else {
-        10.0 * (255.0f64 * 255.0 / mse).log10()
-    }
+    // Identical pictures print as 100 dB, as in the peers' table.
+    qcs::eval::psnr_bytes(a, b)
+        .expect("pictures of the same size")
+        .min(100.0)
 }
 
-fn qcs_at(bytes: &[u8], budget: usize, reference: &[u8]) -> f64 {
+fn qcs_at(bytes: &[u8], budget: usize, reference: &[u8], method: Method) -> f64 {
     let opts = DecodeOptions {
         max_bytes: Some(budget),
-        method: Method::Gouraud,
+        method,
         ..Default::default()
     };
     match qcs::decode(bytes, &opts) {
@@ -67,6 +62,7 @@ fn main() {
         ..Default::default()
     };
     let mut paths = Vec::new();
+    let mut method = Method::Gouraud;
     while let Some(a) = args.next() {
         let mut val = || args.next().expect("a value after the flag");
         match a.as_str() {
@@ -85,6 +81,15 @@ fn main() {
                     "nearest" => SampleColour::Nearest,
                     "bilinear" => SampleColour::Bilinear,
                     other => panic!("unknown colour rule {other}"),
+                }
+            }
+            "--method" => {
+                method = match val().as_str() {
+                    "gouraud" => Method::Gouraud,
+                    "cubic" => Method::Cubic,
+                    "shepard" => Method::Shepard,
+                    "natural" => Method::Natural,
+                    other => panic!("unknown method {other}"),
                 }
             }
             _ => paths.push(a),
@@ -111,7 +116,7 @@ fn main() {
             .file_stem()
             .map_or_else(|| path.clone(), |s| s.to_string_lossy().into_owned());
         for (i, &b) in BUDGETS.iter().chain([&usize::MAX]).enumerate() {
-            let q = qcs_at(&bytes, b, &reference);
+            let q = qcs_at(&bytes, b, &reference, method);
             let j = jpeg_at(&jpg, b, &reference, w, h);
             let label = if b == usize::MAX {
                 "full".to_string()

@@ -26,7 +26,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ];
     let shares = [0.01, 0.05, 0.25, 1.0];
     let counts = [1089usize, 4225, 16641];
-    let methods = [Method::Gouraud, Method::Shepard, Method::Natural];
+    let methods = [
+        Method::Gouraud,
+        Method::Shepard,
+        Method::Natural,
+        Method::Cubic,
+    ];
     let mut colour_table = vec![[0.0f64; 4]; rules.len()];
     let mut recon_table = vec![[0.0f64; 3]; methods.len()];
     for path in &paths {

@@ -34,7 +34,12 @@ pub fn limits() -> Limits {
     }
 }
 
-const METHODS: [Method; 3] = [Method::Gouraud, Method::Shepard, Method::Natural];
+const METHODS: [Method; 4] = [
+    Method::Gouraud,
+    Method::Shepard,
+    Method::Natural,
+    Method::Cubic,
+];
 
 /// A small deterministic generator (xorshift64*) driven by fuzzer bytes.
 struct Rng(u64);
@@ -100,7 +105,7 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
     let w = 1 + (byte(ctl, 0) % 64) as u32;
     let h = 1 + (byte(ctl, 1) % 64) as u32;
     let flags = byte(ctl, 2);
-    let method = METHODS[(flags % 3) as usize];
+    let method = METHODS[(flags % 4) as usize];
     let max_samples = (flags & 0x80 != 0).then_some((flags & 0x1F) as u64);
     let opts = |recover| DecodeOptions {
         method,

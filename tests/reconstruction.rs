@@ -115,7 +115,32 @@ fn sample_region(
         })
         .collect();
     let (sx, sy) = (w as f64 / src.0 as f64, h as f64 / src.1 as f64);
-    if method == Method::Gouraud {
+    // Cubic: the gradient of a point comes from its neighbours, so every vertex of the
+    // triangle must have samples only as neighbours.
+    let faces: Vec<([[f64; 2]; 3], bool)> = if method == Method::Cubic {
+        let mut clean = vec![true; all.len()];
+        for f in set.triangulation().inner_faces() {
+            let v = f.vertices().map(|v| v.data().index as usize);
+            if !v
+                .iter()
+                .all(|&i| samples.contains(&all[i].map(f64::to_bits)))
+            {
+                for i in v {
+                    clean[i] = false;
+                }
+            }
+        }
+        let tri = set.triangulation();
+        tri.inner_faces()
+            .map(|f| {
+                let v = f.vertices().map(|v| v.data().index as usize);
+                (v.map(|i| all[i]), v.iter().all(|&i| clean[i]))
+            })
+            .collect()
+    } else {
+        faces
+    };
+    if matches!(method, Method::Gouraud | Method::Cubic) {
         let tris: Vec<_> = faces
             .iter()
             .filter(|f| f.1)
@@ -159,6 +184,10 @@ fn check_ramp(method: Method, points: &[[f64; 2]], src: (u32, u32), sizes: &[(u3
     let (sw, sh) = (src.0 as f64, src.1 as f64);
     let colours = ramp_colours(points, sw, sh);
     let hl = hull(points);
+    // The vertex colours are the ramp rounded to bytes: ±½ each. Gouraud interpolates them
+    // (±½), then rounds (±½). The cubic patches also carry the gradients' error (estimated
+    // from the rounded colours) into their edge and centre control values.
+    let tolerance = if method == Method::Cubic { 1.5 } else { 1.0 };
     for &(w, h) in sizes {
         let exact = sample_region(method, points, src, w, h);
         let img = render(src, 3, points, &colours, method, w, h);
@@ -179,7 +208,7 @@ fn check_ramp(method: Method, points: &[[f64; 2]], src: (u32, u32), sizes: &[(u3
                 for k in 0..3 {
                     let got = img[o + k] as f64;
                     assert!(
-                        (got - want[k]).abs() <= 1.0 + 1e-9,
+                        (got - want[k]).abs() <= tolerance + 1e-9,
                         "{method:?} {} samples at {w}x{h}: pixel ({i},{j}) channel {k}: {got} vs {}",
                         points.len(),
                         want[k]
@@ -222,6 +251,54 @@ fn gouraud_reproduces_ramp_random_and_grid() {
 }
 
 #[test]
+fn cubic_reproduces_ramp_random_and_grid() {
+    let mut rng = Rng(4);
+    let all = rng.points(4000, 200.0, 150.0);
+    for n in [40, 700, 4000] {
+        check_ramp(Method::Cubic, &all[..n], (200, 150), SIZES);
+    }
+    for step in [7.0, 2.0] {
+        let mut grid = Vec::new();
+        let mut y = 0.5;
+        while y < 150.0 {
+            let mut x = 0.5;
+            while x < 200.0 {
+                grid.push([x, y]);
+                x += step;
+            }
+            y += step;
+        }
+        check_ramp(Method::Cubic, &grid, (200, 150), SIZES);
+    }
+}
+
+#[test]
+fn cubic_is_closer_than_gouraud_on_a_smooth_picture() {
+    // A smooth picture sampled at random points: the cubic patches follow its curvature,
+    // Gouraud's planes cannot (compared inside the samples' hull, away from the edges).
+    let f = |p: [f64; 2]| 128.0 + 100.0 * (p[0] / 9.0).sin() * (p[1] / 13.0).cos();
+    let mut rng = Rng(5);
+    let pts = rng.points(1500, 200.0, 150.0);
+    let colours: Vec<u8> = pts.iter().map(|&p| f(p).round() as u8).collect();
+    let mse = |method| {
+        let img = render((200, 150), 1, &pts, &colours, method, 200, 150);
+        let mut se = 0.0;
+        for j in 10..140 {
+            for i in 10..190 {
+                let d = img[j * 200 + i] as f64 - f([i as f64 + 0.5, j as f64 + 0.5]);
+                se += d * d;
+            }
+        }
+        se / (130.0 * 180.0)
+    };
+    let (gouraud, cubic) = (mse(Method::Gouraud), mse(Method::Cubic));
+    assert!(
+        cubic < 0.6 * gouraud,
+        "MSE cubic {cubic:.2}, Gouraud {gouraud:.2}"
+    );
+}
+
+#[test]
 fn natural_reproduces_ramp() {
     // Sibson coordinates have linear precision.
     let mut rng = Rng(2);
@@ -247,7 +324,12 @@ fn constant_stays_constant_everywhere() {
                 .iter()
                 .flat_map(|_| colour[..channels].to_vec())
                 .collect();
-            for method in [Method::Gouraud, Method::Shepard, Method::Natural] {
+            for method in [
+                Method::Gouraud,
+                Method::Shepard,
+                Method::Natural,
+                Method::Cubic,
+            ] {
                 for (w, h) in [(100, 75), (97, 61), (7, 5), (203, 151), (1, 1)] {
                     let img = render((100, 75), channels, pts, &colours, method, w, h);
                     assert_eq!(img.len(), (w * h) as usize * channels);
@@ -267,7 +349,12 @@ fn constant_stays_constant_everywhere() {
 
 #[test]
 fn empty_set_is_mid_grey_and_zero_size_is_empty() {
-    for method in [Method::Gouraud, Method::Shepard, Method::Natural] {
+    for method in [
+        Method::Gouraud,
+        Method::Shepard,
+        Method::Natural,
+        Method::Cubic,
+    ] {
         assert_eq!(render((10, 10), 3, &[], &[], method, 4, 3), vec![128; 36]);
         assert!(render((10, 10), 3, &[[1.0, 1.0]], &[1, 2, 3], method, 0, 3).is_empty());
     }
@@ -278,7 +365,7 @@ fn two_samples_paint_a_linear_ramp_between_them() {
     // With their mirror points the two samples are a grid of rectangles; the colour depends
     // on x only: flat beyond the samples (mirrored), linear between them.
     let pts = [[10.0, 50.0], [90.0, 50.0]];
-    for method in [Method::Gouraud, Method::Natural] {
+    for method in [Method::Gouraud, Method::Natural, Method::Cubic] {
         let img = render((100, 100), 1, &pts, &[0, 200], method, 100, 100);
         for j in [0usize, 37, 99] {
             let row = &img[j * 100..j * 100 + 100];
@@ -558,6 +645,9 @@ fn incremental_equals_one_shot() {
     let cols: Vec<u8> = (0..pts.len() * 3)
         .map(|_| (rng.next() % 256) as u8)
         .collect();
+    // (Not Method::Cubic: without lattice points the triangles are spade's, and the cubic
+    // gradients depend on which diagonal it picks in cocircular quadrilaterals, e.g. of a
+    // sample's mirror points; tests/cells.rs checks the cubic picture from exact samples.)
     for method in [Method::Gouraud, Method::Natural, Method::Shepard] {
         let mut set = SampleSet::new(120, 90, 3);
         let mut k = 0;
@@ -585,7 +675,12 @@ fn parallel_equals_single_threaded() {
     let mut rng = Rng(8);
     let pts = rng.points(3000, 100.0, 100.0);
     let cols: Vec<u8> = (0..pts.len()).map(|_| (rng.next() % 256) as u8).collect();
-    for method in [Method::Gouraud, Method::Shepard, Method::Natural] {
+    for method in [
+        Method::Gouraud,
+        Method::Shepard,
+        Method::Natural,
+        Method::Cubic,
+    ] {
         let a = render_with((100, 100), 1, &pts, &cols, method, 173, 211, single());
         let b = render((100, 100), 1, &pts, &cols, method, 173, 211);
         assert!(a == b, "{method:?}");
@@ -601,7 +696,12 @@ fn bad_input_does_not_panic() {
         [3.0, 3.0],
         [5.0, 1.0],
     ];
-    for method in [Method::Gouraud, Method::Shepard, Method::Natural] {
+    for method in [
+        Method::Gouraud,
+        Method::Shepard,
+        Method::Natural,
+        Method::Cubic,
+    ] {
         // Short colour buffer, zero-sized source, odd channel count.
         let img = render((0, 0), 7, &pts, &[9, 9, 9], method, 5, 4);
         assert_eq!(img.len(), 5 * 4 * 4);

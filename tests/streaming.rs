@@ -42,7 +42,12 @@ fn recovery_drops_damaged_samples_from_later_renders() {
     let mut bad = file();
     let n = bad.len();
     bad[n - 2] ^= 0x55; // the last level's CRC
-    for method in [Method::Gouraud, Method::Shepard, Method::Natural] {
+    for method in [
+        Method::Gouraud,
+        Method::Shepard,
+        Method::Natural,
+        Method::Cubic,
+    ] {
         let opts = ParserOptions::with_limits(Limits::default()).recover(true);
         let mut d = StreamDecoder::with_options(opts);
         d.push(&bad[..n - 30]).expect("push");

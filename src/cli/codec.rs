@@ -15,6 +15,7 @@ pub enum MethodArg {
     Gouraud,
     Shepard,
     Natural,
+    Cubic,
 }
 
 impl From<MethodArg> for Method {
@@ -23,6 +24,7 @@ impl From<MethodArg> for Method {
             MethodArg::Gouraud => Method::Gouraud,
             MethodArg::Shepard => Method::Shepard,
             MethodArg::Natural => Method::Natural,
+            MethodArg::Cubic => Method::Cubic,
         }
     }
 }

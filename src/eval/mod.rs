@@ -176,6 +176,7 @@ fn method_name(m: Method) -> &'static str {
         Method::Gouraud => "gouraud",
         Method::Shepard => "shepard",
         Method::Natural => "natural",
+        Method::Cubic => "cubic",
     }
 }
 

@@ -7,6 +7,7 @@
 use spade::Triangulation as _;
 
 use super::cells::Cells;
+use super::cubic;
 use super::hull::{colour_of, Boundary};
 use super::mesh::Triangulation;
 use super::raster::{self, fmax, fmin, Band, RasterTriangle, RasterVertex};
@@ -166,16 +167,16 @@ fn cell_fan(
     }
 }
 
-/// Renders `mesh` by Gouraud shading into `frame`'s output: over the canonical `cells` when
-/// given (their vertices index `positions`), else over `mesh`'s own triangles. Each cell (or
-/// triangle) is set up afresh in every band of rows it touches, so nothing per triangle is
-/// kept in memory.
+/// Renders `mesh` by Gouraud shading (or, if `cubic`, by the cubic patches of
+/// [`super::cubic`]) into `frame`'s output: over the canonical `cells` when given (their
+/// vertices index `positions`), else over `mesh`'s own triangles. Each cell (or triangle) is
+/// set up afresh in every band of rows it touches, so nothing per triangle is kept in memory.
 pub(crate) fn render(
     mesh: &Triangulation,
     cells: Option<&Cells>,
     positions: &[Point],
     frame: &Frame<'_>,
-    parallel: bool,
+    (parallel, cubic): (bool, bool),
 ) -> Vec<u8> {
     let (w, h, c) = (frame.width, frame.height, frame.channels);
     let scale = [1.0 / frame.sx, 1.0 / frame.sy];
@@ -215,8 +216,12 @@ pub(crate) fn render(
                     (fmin(v, a), fmax(v, b))
                 })
             };
+            let patches = cubic.then(|| cubic::vertices(&verts, cells.iter(), c, scale));
             let emit = |k: usize, band: &mut Band<'_>| {
-                if let Some(cell) = cells.get(k) {
+                let Some(cell) = cells.get(k) else { return };
+                if let Some(patches) = &patches {
+                    cubic::paint_cell(cell, patches, band);
+                } else {
                     let paint = |t: [&RasterVertex; 3]| raster::paint(t, band);
                     cell_fan(cell, positions, colours, c, scale, &verts, paint);
                 }
@@ -229,8 +234,12 @@ pub(crate) fn render(
                 let [a, b, c] = tris[k].map(y);
                 (fmin(fmin(a, b), c), fmax(fmax(a, b), c))
             };
-            let emit =
-                |k: usize, band: &mut Band<'_>| raster::paint(tris[k].map(|i| at(&verts, i)), band);
+            let patches =
+                cubic.then(|| cubic::vertices(&verts, tris.iter().map(|t| &t[..]), c, scale));
+            let emit = |k: usize, band: &mut Band<'_>| match &patches {
+                Some(patches) => cubic::paint_cell(&tris[k], patches, band),
+                None => raster::paint(tris[k].map(|i| at(&verts, i)), band),
+            };
             raster::paint_groups(tris.len(), extent, emit, (w, h, c), opts, finish).0
         }
     }

@@ -200,7 +200,12 @@ impl Edge {
 /// Calls `span(j, i0, i1)` for every row `j` in `lo..hi` that holds centres inside the
 /// triangle `p`, with the pixels `i0..i1` (within `0..w`, non-empty) whose centres are inside.
 #[inline(always)]
-fn scan(p: [[f64; 2]; 3], (lo, hi): (i64, i64), w: i64, mut span: impl FnMut(i64, i64, i64)) {
+pub(crate) fn scan(
+    p: [[f64; 2]; 3],
+    (lo, hi): (i64, i64),
+    w: i64,
+    mut span: impl FnMut(i64, i64, i64),
+) {
     // Sort by y: top, mid, bottom.
     let [mut t, mut m, mut b] = p;
     if m[1] < t[1] {
@@ -387,19 +392,39 @@ pub(crate) struct Band<'a> {
     pub(crate) painted: Option<&'a mut [bool]>,
 }
 
+/// What paints a triangle's pixels row by row: [`Plane`] for Gouraud, the cubic patches.
+pub(crate) trait Shader {
+    /// Paints `px`, the pixels `i0..` of row `j` (all the shader's channels for each).
+    fn fill(&self, px: &mut [u8], i0: i64, j: i64);
+}
+
+impl<const C: usize> Shader for Plane<C> {
+    #[inline(always)]
+    fn fill(&self, px: &mut [u8], i0: i64, j: i64) {
+        Plane::fill(self, px, i0, j)
+    }
+}
+
+/// Paints the pixels of `band` whose centres are inside the triangle `p`, `C` channels each,
+/// with the shader `make` builds (only if the triangle has a pixel in the band), and marks
+/// them painted.
 #[inline(always)]
-fn paint_c<const C: usize>(v: [&RasterVertex; 3], band: &mut Band<'_>) {
+pub(crate) fn paint_with<const C: usize, S: Shader>(
+    p: [[f64; 2]; 3],
+    band: &mut Band<'_>,
+    make: impl Fn() -> S,
+) {
     let w = band.width;
     let rows = (band.row0 as i64, (band.row0 + band.rows) as i64);
-    let mut plane = None;
+    let mut shader = None;
     let pixels = &mut *band.pixels;
     let mut painted = band.painted.as_deref_mut();
     let row0 = band.row0;
-    scan(v.map(|v| v.pos), rows, w as i64, |j, i0, i1| {
-        let plane = plane.get_or_insert_with(|| Plane::<C>::new(v));
+    scan(p, rows, w as i64, |j, i0, i1| {
+        let shader = shader.get_or_insert_with(&make);
         let base = (j as usize - row0) * w;
         let (o0, o1) = (base + i0 as usize, base + i1 as usize);
-        plane.fill(&mut pixels[o0 * C..o1 * C], i0, j);
+        shader.fill(&mut pixels[o0 * C..o1 * C], i0, j);
         if let Some(m) = painted.as_deref_mut() {
             m[o0..o1].fill(true);
         }
@@ -409,11 +434,12 @@ fn paint_c<const C: usize>(v: [&RasterVertex; 3], band: &mut Band<'_>) {
 /// Paints the pixels of `band` covered by the triangle `v` (and marks them painted).
 #[inline]
 pub(crate) fn paint(v: [&RasterVertex; 3], band: &mut Band<'_>) {
+    let p = v.map(|v| v.pos);
     match band.channels {
-        1 => paint_c::<1>(v, band),
-        2 => paint_c::<2>(v, band),
-        3 => paint_c::<3>(v, band),
-        _ => paint_c::<4>(v, band),
+        1 => paint_with::<1, _>(p, band, || Plane::<1>::new(v)),
+        2 => paint_with::<2, _>(p, band, || Plane::<2>::new(v)),
+        3 => paint_with::<3, _>(p, band, || Plane::<3>::new(v)),
+        _ => paint_with::<4, _>(p, band, || Plane::<4>::new(v)),
     }
 }
 
