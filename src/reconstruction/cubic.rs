@@ -145,15 +145,15 @@ pub(crate) fn centre(vertices: impl Iterator<Item = CubicVertex>) -> CubicVertex
 }
 
 /// A triangle's patch in the form it is evaluated in: barycentric coordinates `(v, w)` of
-/// vertices 1 and 2 as affine functions of the pixel centre, and the ten Bézier control values
-/// per channel with their multinomial factors (3 or 6) folded in.
+/// vertices 1 and 2 as affine functions of the pixel centre, and per channel the patch as a
+/// polynomial in `(v, w)` (`u = 1 − v − w` eliminated).
 struct Patch<const C: usize> {
     origin: [f64; 2],
     /// d(v, w)/dx and d(v, w)/dy.
     dx: [f64; 2],
     dy: [f64; 2],
-    /// Control values in the order u³, v³, w³, u²v, uv², v²w, vw², w²u, wu², uvw.
-    ctrl: [[f64; 10]; C],
+    /// Coefficients of 1, v, w, v², vw, w², v³, v²w, vw², w³.
+    mono: [[f64; 10]; C],
 }
 
 impl<const C: usize> raster::Shader for Patch<C> {
@@ -167,22 +167,11 @@ impl<const C: usize> raster::Shader for Patch<C> {
         let mut v = x * self.dx[0] + y * self.dy[0];
         let mut w = x * self.dx[1] + y * self.dy[1];
         for p in px.chunks_exact_mut(C) {
-            let u = 1.0 - v - w;
-            let (uu, vv, ww) = (u * u, v * v, w * w);
-            let basis = [
-                uu * u,
-                vv * v,
-                ww * w,
-                uu * v,
-                u * vv,
-                vv * w,
-                v * ww,
-                ww * u,
-                w * uu,
-                u * v * w,
-            ];
             for c in 0..C {
-                let s: f64 = self.ctrl[c].iter().zip(&basis).map(|(a, b)| a * b).sum();
+                let [m00, m10, m01, m20, m11, m02, m30, m21, m12, m03] = self.mono[c];
+                let s = m00
+                    + v * (m10 + v * (m20 + v * m30 + w * m21) + w * m11)
+                    + w * (m01 + w * (m02 + w * m03 + v * m12));
                 // Saturating float → int cast: clamps to 0..=255.
                 p[c] = (s + 0.5) as u8;
             }
@@ -198,9 +187,10 @@ impl<const C: usize> Patch<C> {
         let (d1x, d1y) = (p1[0] - p0[0], p1[1] - p0[1]);
         let (d2x, d2y) = (p2[0] - p0[0], p2[1] - p0[1]);
         let inv = 1.0 / (d1x * d2y - d1y * d2x);
-        // A triangle too thin for its area to be a float is drawn in its first colour.
+        // A triangle too thin for its area to be a float is drawn in its first colour
+        // ((v, w) = (0, 0) everywhere: only the constant term counts).
         let inv = if inv.is_finite() { inv } else { 0.0 };
-        let mut ctrl = [[0.0; 10]; C];
+        let mut mono = [[0.0; 10]; C];
         for c in 0..C {
             let f = t.map(|v| v.colour[c]);
             // f_i + ∇f_i · (p_j − p_i) / 3.
@@ -213,15 +203,28 @@ impl<const C: usize> Patch<C> {
             let mean_e = edges.iter().sum::<f64>() / 6.0;
             let mean_v = (f[0] + f[1] + f[2]) / 3.0;
             let mid = mean_e + (mean_e - mean_v) / 2.0;
-            let [e01, e10, e12, e21, e20, e02] = edges.map(|x| 3.0 * x);
-            // With inv = 0, (v, w) = (0, 0) everywhere: only the u³ term counts.
-            ctrl[c] = [f[0], f[1], f[2], e01, e10, e12, e21, e20, e02, 6.0 * mid];
+            // The Bernstein form f0·u³ + f1·v³ + f2·w³ + 3·(e01·u²v + e10·uv² + e12·v²w +
+            // e21·vw² + e20·w²u + e02·u²w) + 6·mid·uvw, with u = 1 − v − w expanded.
+            let [e01, e10, e12, e21, e20, e02] = edges.map(|e| 3.0 * e);
+            let (a, m) = (f[0], 6.0 * mid);
+            mono[c] = [
+                a,
+                -3.0 * a + e01,
+                -3.0 * a + e02,
+                3.0 * a - 2.0 * e01 + e10,
+                6.0 * a - 2.0 * e01 - 2.0 * e02 + m,
+                3.0 * a + e20 - 2.0 * e02,
+                -a + e01 - e10 + f[1],
+                -3.0 * a + 2.0 * e01 - e10 + e12 + e02 - m,
+                -3.0 * a + e01 + e21 - e20 + 2.0 * e02 - m,
+                -a - e20 + e02 + f[2],
+            ];
         }
         Patch {
             origin: p0,
             dx: [d2y * inv, -d1y * inv],
             dy: [-d2x * inv, d1x * inv],
-            ctrl,
+            mono,
         }
     }
 }
