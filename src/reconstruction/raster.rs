@@ -200,12 +200,7 @@ impl Edge {
 /// Calls `span(j, i0, i1)` for every row `j` in `lo..hi` that holds centres inside the
 /// triangle `p`, with the pixels `i0..i1` (within `0..w`, non-empty) whose centres are inside.
 #[inline(always)]
-pub(crate) fn scan(
-    p: [[f64; 2]; 3],
-    (lo, hi): (i64, i64),
-    w: i64,
-    mut span: impl FnMut(i64, i64, i64),
-) {
+fn scan(p: [[f64; 2]; 3], (lo, hi): (i64, i64), w: i64, mut span: impl FnMut(i64, i64, i64)) {
     // Sort by y: top, mid, bottom.
     let [mut t, mut m, mut b] = p;
     if m[1] < t[1] {
@@ -349,7 +344,27 @@ impl<const C: usize> Plane<C> {
             fixed: tame.then_some(((ia, ja), f)),
         }
     }
+}
 
+/// A band of output rows being painted: `pixels` (and `painted`, when kept) hold rows
+/// `row0..row0 + rows`.
+pub(crate) struct Band<'a> {
+    pub(crate) width: usize,
+    pub(crate) row0: usize,
+    pub(crate) rows: usize,
+    pub(crate) channels: usize,
+    pub(crate) pixels: &'a mut [u8],
+    /// Which pixels a triangle claimed; `None` when the triangles are known to cover the band.
+    pub(crate) painted: Option<&'a mut [bool]>,
+}
+
+/// What paints a triangle's pixels row by row: [`Plane`] for Gouraud, the cubic patches.
+pub(crate) trait Shader {
+    /// Paints `px`, the pixels `i0..` of row `j` (all the shader's channels for each).
+    fn fill(&self, px: &mut [u8], i0: i64, j: i64);
+}
+
+impl<const C: usize> Shader for Plane<C> {
     /// Paints `px`, the pixels `i0..` of row `j` (`C` channels each): each channel of the
     /// plane at the pixel centre, rounded half up and clamped to 0..=255.
     #[inline(always)]
@@ -377,31 +392,6 @@ impl<const C: usize> Plane<C> {
                 p[k] = (self.c0[k] + self.gx[k] * dx + self.gy[k] * dy + 0.5) as u8;
             }
         }
-    }
-}
-
-/// A band of output rows being painted: `pixels` (and `painted`, when kept) hold rows
-/// `row0..row0 + rows`.
-pub(crate) struct Band<'a> {
-    pub(crate) width: usize,
-    pub(crate) row0: usize,
-    pub(crate) rows: usize,
-    pub(crate) channels: usize,
-    pub(crate) pixels: &'a mut [u8],
-    /// Which pixels a triangle claimed; `None` when the triangles are known to cover the band.
-    pub(crate) painted: Option<&'a mut [bool]>,
-}
-
-/// What paints a triangle's pixels row by row: [`Plane`] for Gouraud, the cubic patches.
-pub(crate) trait Shader {
-    /// Paints `px`, the pixels `i0..` of row `j` (all the shader's channels for each).
-    fn fill(&self, px: &mut [u8], i0: i64, j: i64);
-}
-
-impl<const C: usize> Shader for Plane<C> {
-    #[inline(always)]
-    fn fill(&self, px: &mut [u8], i0: i64, j: i64) {
-        Plane::fill(self, px, i0, j)
     }
 }
 
