@@ -216,7 +216,8 @@ pub(crate) fn render(
                     (fmin(v, a), fmax(v, b))
                 })
             };
-            let patches = cubic.then(|| cubic::vertices(&verts, cells.iter(), c, scale));
+            let patches =
+                cubic.then(|| cubic::vertices(&verts, cells.iter(), c, (scale, parallel)));
             let emit = |k: usize, band: &mut Band<'_>| {
                 let Some(cell) = cells.get(k) else { return };
                 if let Some(patches) = &patches {
@@ -234,8 +235,9 @@ pub(crate) fn render(
                 let [a, b, c] = tris[k].map(y);
                 (fmin(fmin(a, b), c), fmax(fmax(a, b), c))
             };
-            let patches =
-                cubic.then(|| cubic::vertices(&verts, tris.iter().map(|t| &t[..]), c, scale));
+            let patches = cubic.then(|| {
+                cubic::vertices(&verts, tris.iter().map(|t| &t[..]), c, (scale, parallel))
+            });
             let emit = |k: usize, band: &mut Band<'_>| match &patches {
                 Some(patches) => cubic::paint_cell(&tris[k], patches, band),
                 None => raster::paint(tris[k].map(|i| at(&verts, i)), band),
