@@ -6,21 +6,22 @@
 //! centre is `(i + 0.5, j + 0.5)`. A render at `w × h` from a `W × H` source samples the output
 //! pixel centres; source coordinates map to output ones by `x · w / W`, `y · h / H`. Every
 //! method defines one continuous picture on the source plane and samples it, so all output
-//! sizes show the same picture: Gouraud (affine-invariant) is rasterised in output pixels, and
+//! sizes show the same picture: Gouraud (affine-invariant) is rasterised in output pixels, as
+//! are the cubic patches (their vertex gradients estimated in source pixels), and
 //! Shepard and natural-neighbour weights, like the outside-the-hull rule, are computed at the
 //! output pixel centre mapped back to source pixels.
 //!
 //! # Mirror points
 //!
-//! Gouraud and natural neighbour triangulate the samples together with their **mirror
+//! Gouraud, cubic and natural neighbour triangulate the samples together with their **mirror
 //! points**: each sample near an image edge, reflected across it, carrying its colour (see
 //! the `mirror` module and `spec/reconstruction.md` §2). The picture is then as well shaped
 //! at the edges as inside, and gets better, not worse, as samples arrive there.
 //!
 //! # Outside the convex hull
 //!
-//! Gouraud and natural neighbour are only defined inside the convex hull of the samples and
-//! their mirror points, which covers the image from the first sample on (its mirror points
+//! Gouraud, cubic and natural neighbour are only defined inside the convex hull of the samples
+//! and their mirror points, which covers the image from the first sample on (its mirror points
 //! surround it) unless the samples are outside the image. A pixel centre outside it takes
 //! the colour of the **nearest point of the hull boundary** (distance in source pixels),
 //! colours being linear along each hull edge between its two end samples. This continues the interpolation without a seam and leaves no black border. With
