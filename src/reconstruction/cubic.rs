@@ -238,7 +238,7 @@ impl<const C: usize> Patch<C> {
 }
 
 /// Paints the pixels of `band` covered by the triangle `t` (and marks them painted).
-pub(crate) fn paint(t: [&CubicVertex; 3], band: &mut Band<'_>) {
+fn paint(t: [&CubicVertex; 3], band: &mut Band<'_>) {
     let p = t.map(|v| v.pos);
     match band.channels {
         1 => raster::paint_with::<1, _>(p, band, || Patch::<1>::new(t)),
