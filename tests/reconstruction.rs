@@ -227,6 +227,13 @@ fn check_ramp(method: Method, points: &[[f64; 2]], src: (u32, u32), sizes: &[(u3
 
 const SIZES: &[(u32, u32)] = &[(200, 150), (97, 61), (311, 233), (13, 7)];
 
+const METHODS: [Method; 4] = [
+    Method::Gouraud,
+    Method::Shepard,
+    Method::Natural,
+    Method::Cubic,
+];
+
 #[test]
 fn gouraud_reproduces_ramp_random_and_grid() {
     let mut rng = Rng(1);
@@ -324,12 +331,7 @@ fn constant_stays_constant_everywhere() {
                 .iter()
                 .flat_map(|_| colour[..channels].to_vec())
                 .collect();
-            for method in [
-                Method::Gouraud,
-                Method::Shepard,
-                Method::Natural,
-                Method::Cubic,
-            ] {
+            for method in METHODS {
                 for (w, h) in [(100, 75), (97, 61), (7, 5), (203, 151), (1, 1)] {
                     let img = render((100, 75), channels, pts, &colours, method, w, h);
                     assert_eq!(img.len(), (w * h) as usize * channels);
@@ -349,12 +351,7 @@ fn constant_stays_constant_everywhere() {
 
 #[test]
 fn empty_set_is_mid_grey_and_zero_size_is_empty() {
-    for method in [
-        Method::Gouraud,
-        Method::Shepard,
-        Method::Natural,
-        Method::Cubic,
-    ] {
+    for method in METHODS {
         assert_eq!(render((10, 10), 3, &[], &[], method, 4, 3), vec![128; 36]);
         assert!(render((10, 10), 3, &[[1.0, 1.0]], &[1, 2, 3], method, 0, 3).is_empty());
     }
@@ -675,12 +672,7 @@ fn parallel_equals_single_threaded() {
     let mut rng = Rng(8);
     let pts = rng.points(3000, 100.0, 100.0);
     let cols: Vec<u8> = (0..pts.len()).map(|_| (rng.next() % 256) as u8).collect();
-    for method in [
-        Method::Gouraud,
-        Method::Shepard,
-        Method::Natural,
-        Method::Cubic,
-    ] {
+    for method in METHODS {
         let a = render_with((100, 100), 1, &pts, &cols, method, 173, 211, single());
         let b = render((100, 100), 1, &pts, &cols, method, 173, 211);
         assert!(a == b, "{method:?}");
@@ -696,12 +688,7 @@ fn bad_input_does_not_panic() {
         [3.0, 3.0],
         [5.0, 1.0],
     ];
-    for method in [
-        Method::Gouraud,
-        Method::Shepard,
-        Method::Natural,
-        Method::Cubic,
-    ] {
+    for method in METHODS {
         // Short colour buffer, zero-sized source, odd channel count.
         let img = render((0, 0), 7, &pts, &[9, 9, 9], method, 5, 4);
         assert_eq!(img.len(), 5 * 4 * 4);
