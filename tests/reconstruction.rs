@@ -234,6 +234,21 @@ const METHODS: [Method; 4] = [
     Method::Cubic,
 ];
 
+/// Points `step` apart from (0.5, 0.5) over a 200 × 150 source.
+fn grid(step: f64) -> Vec<[f64; 2]> {
+    let mut grid = Vec::new();
+    let mut y = 0.5;
+    while y < 150.0 {
+        let mut x = 0.5;
+        while x < 200.0 {
+            grid.push([x, y]);
+            x += step;
+        }
+        y += step;
+    }
+    grid
+}
+
 #[test]
 fn gouraud_reproduces_ramp_random_and_grid() {
     let mut rng = Rng(1);
@@ -243,17 +258,7 @@ fn gouraud_reproduces_ramp_random_and_grid() {
     }
     // Grid points (cocircular everywhere: ties in the triangulation and pixel centres on edges).
     for step in [7.0, 2.0, 1.0] {
-        let mut grid = Vec::new();
-        let mut y = 0.5;
-        while y < 150.0 {
-            let mut x = 0.5;
-            while x < 200.0 {
-                grid.push([x, y]);
-                x += step;
-            }
-            y += step;
-        }
-        check_ramp(Method::Gouraud, &grid, (200, 150), SIZES);
+        check_ramp(Method::Gouraud, &grid(step), (200, 150), SIZES);
     }
 }
 
@@ -265,17 +270,7 @@ fn cubic_reproduces_ramp_random_and_grid() {
         check_ramp(Method::Cubic, &all[..n], (200, 150), SIZES);
     }
     for step in [7.0, 2.0] {
-        let mut grid = Vec::new();
-        let mut y = 0.5;
-        while y < 150.0 {
-            let mut x = 0.5;
-            while x < 200.0 {
-                grid.push([x, y]);
-                x += step;
-            }
-            y += step;
-        }
-        check_ramp(Method::Cubic, &grid, (200, 150), SIZES);
+        check_ramp(Method::Cubic, &grid(step), (200, 150), SIZES);
     }
 }
 
