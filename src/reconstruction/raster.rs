@@ -81,11 +81,10 @@ fn ceil_frac(u: f64) -> (i64, f64) {
     let r = (u + MAGIC) - MAGIC;
     let n = round_i64(u);
     let d = r - u;
-    if d < 0.0 {
-        (n + 1, d + 1.0)
-    } else {
-        (n, d)
-    }
+    // `d < 0` from its sign bit (`d` is never −0: `r − u` is +0 when they are equal), without
+    // a branch: the sign is a coin toss, which a branch predictor loses.
+    let up = (d.to_bits() >> 63) as i64;
+    (n + up, d + up as f64)
 }
 
 /// The first row `k` in `lo..=hi` (`0 ≤ lo ≤ hi < 2^51`) whose centre line `k + 0.5` is at
