@@ -293,8 +293,8 @@ impl<const C: usize> Cands<C> {
         let mut b = [(f64::INFINITY, 0); 4];
         let head = m.min(8);
         if m >= 4 {
-            // The first eight at once; the first four sorted by a network, the next four
-            // inserted; then the rest while they can still be nearer.
+            // The first eight at once, the 4 nearest of them chosen by a network of minima and
+            // maxima; then the rest while they can still be nearer.
             let mut d = [0.0; 8];
             if let (Some(x8), Some(y8)) = (xs.first_chunk::<8>(), ys.first_chunk::<8>()) {
                 for k in 0..8 {
@@ -306,17 +306,44 @@ impl<const C: usize> Cands<C> {
                     d[k] = d2(k);
                 }
             }
-            b = [(d[0], 0), (d[1], 1), (d[2], 2), (d[3], 3)];
-            for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
-                if before(b[j], b[i]) {
-                    b.swap(i, j);
+            // Without branches: which of two candidates is nearer is a coin toss, which a
+            // branch predictor loses (one-core callgrind of a 16k-site render: 4.9 → 1.6 M
+            // mispredicts). Keys `d² << 64 | sample index << 32 | candidate` order like
+            // `before` (d² ≥ 0: its bits order like its value).
+            let key = |k: usize| {
+                (u128::from(d[k].to_bits()) << 64) | (u128::from(ids[k]) << 32) | k as u128
+            };
+            let cas = |e: &mut [u128; 4], i: usize, j: usize| {
+                let (x, y) = (e[i], e[j]);
+                e[i] = x.min(y);
+                e[j] = x.max(y);
+            };
+            let sort4 = |e: &mut [u128; 4]| {
+                for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+                    cas(e, i, j);
+                }
+            };
+            let mut e = [key(0), key(1), key(2), key(3)];
+            sort4(&mut e);
+            if head == 8 {
+                // The 4 least of two sorted fours, then sorted (a bitonic merge).
+                let mut f = [key(4), key(5), key(6), key(7)];
+                sort4(&mut f);
+                for i in 0..4 {
+                    e[i] = e[i].min(f[3 - i]);
+                }
+                for (i, j) in [(0, 2), (1, 3), (0, 1), (2, 3)] {
+                    cas(&mut e, i, j);
+                }
+            } else {
+                for k in 4..head {
+                    e[3] = e[3].min(key(k));
+                    cas(&mut e, 2, 3);
+                    cas(&mut e, 1, 2);
+                    cas(&mut e, 0, 1);
                 }
             }
-            for k in 4..head {
-                if d[k] <= b[3].0 && before((d[k], k), b[3]) {
-                    insert(&mut b, (d[k], k));
-                }
-            }
+            b = e.map(|e| (f64::from_bits((e >> 64) as u64), e as u32 as usize));
         } else {
             for k in 0..m {
                 insert(&mut b, (d2(k), k));
