@@ -292,19 +292,13 @@ impl<const C: usize> Cands<C> {
         };
         let mut b = [(f64::INFINITY, 0); 4];
         let head = m.min(8);
-        if m >= 4 {
+        if let (Some(x8), Some(y8)) = (xs.first_chunk::<8>(), ys.first_chunk::<8>()) {
             // The first eight at once, the 4 nearest of them chosen by a network of minima and
             // maxima; then the rest while they can still be nearer.
             let mut d = [0.0; 8];
-            if let (Some(x8), Some(y8)) = (xs.first_chunk::<8>(), ys.first_chunk::<8>()) {
-                for k in 0..8 {
-                    let (dx, dy) = (x8[k] - q[0], y8[k] - q[1]);
-                    d[k] = dx * dx + dy * dy;
-                }
-            } else {
-                for k in 0..head {
-                    d[k] = d2(k);
-                }
+            for k in 0..8 {
+                let (dx, dy) = (x8[k] - q[0], y8[k] - q[1]);
+                d[k] = dx * dx + dy * dy;
             }
             // Without branches: which of two candidates is nearer is a coin toss, which a
             // branch predictor loses (one-core callgrind of a 16k-site render: 4.9 → 1.6 M
@@ -323,30 +317,25 @@ impl<const C: usize> Cands<C> {
                     cas(e, i, j);
                 }
             };
+            // The 4 least of two sorted fours, then sorted (a bitonic merge).
             let mut e = [key(0), key(1), key(2), key(3)];
+            let mut f = [key(4), key(5), key(6), key(7)];
             sort4(&mut e);
-            if head == 8 {
-                // The 4 least of two sorted fours, then sorted (a bitonic merge).
-                let mut f = [key(4), key(5), key(6), key(7)];
-                sort4(&mut f);
-                for i in 0..4 {
-                    e[i] = e[i].min(f[3 - i]);
-                }
-                for (i, j) in [(0, 2), (1, 3), (0, 1), (2, 3)] {
-                    cas(&mut e, i, j);
-                }
-            } else {
-                for k in 4..head {
-                    e[3] = e[3].min(key(k));
-                    cas(&mut e, 2, 3);
-                    cas(&mut e, 1, 2);
-                    cas(&mut e, 0, 1);
-                }
+            sort4(&mut f);
+            for i in 0..4 {
+                e[i] = e[i].min(f[3 - i]);
+            }
+            for (i, j) in [(0, 2), (1, 3), (0, 1), (2, 3)] {
+                cas(&mut e, i, j);
             }
             b = e.map(|e| (f64::from_bits((e >> 64) as u64), e as u32 as usize));
         } else {
+            // Fewer than eight candidates (only in very small sample sets).
             for k in 0..m {
-                insert(&mut b, (d2(k), k));
+                let e = (d2(k), k);
+                if k < 4 || before(e, b[3]) {
+                    insert(&mut b, e);
+                }
             }
         }
         if m > head {
