@@ -1,7 +1,7 @@
 //! Shepard interpolation: inverse squared distance weighting of the 4 nearest samples.
 //!
 //! The 4 nearest samples are found exactly. The output is rendered in blocks of pixels about
-//! 2 sample spacings wide: each block gathers once, from a uniform grid over the samples,
+//! 1.5 sample spacings wide: each block gathers once, from a uniform grid over the samples,
 //! every sample that can be among the 4 nearest of one of its pixel centres (within
 //! `D4(c) + 2r` of its centre `c`, `r` the half-diagonal), sorted by distance to `c`, and each
 //! pixel scans that list nearest first until no later candidate can come nearer than its 4th.
@@ -413,17 +413,19 @@ impl<const C: usize> Cands<C> {
 }
 
 /// Block side in sample spacings: larger blocks gather candidates for more pixels at once,
-/// smaller ones leave fewer candidates to scan per pixel. (With the AVX path, 2 beats 1.5 by
-/// a third from 65k and 262k sites for a 1024² output and ties it from 16k; 2.5 and 3 lose.)
-const BLOCK: f64 = 2.0;
+/// smaller ones leave fewer candidates to scan per pixel. (For a 1024² output from 16k, 65k
+/// and 262k sites with the AVX path: 1 ties at 16k and 65k and loses at 262k; 2, 2.5 and 3
+/// lose at 16k. Blocks of any width lost to whole fours: a partial four wastes lanes.)
+const BLOCK: f64 = 1.5;
 
-/// Output pixels per block side: blocks about `BLOCK` sample spacings wide.
-fn block_size(grid: &Grid, step: f64) -> usize {
-    let b = (BLOCK * grid.spacing() / step).round();
+/// Output pixels per block side: blocks about `BLOCK` sample spacings wide, in whole `unit`s
+/// (up to 32 pixels).
+fn block_size(grid: &Grid, step: f64, unit: usize) -> usize {
+    let b = (BLOCK * grid.spacing() / step / unit as f64).round();
     if b.is_finite() {
-        b.clamp(1.0, 32.0) as usize
+        b.clamp(1.0, (32 / unit) as f64) as usize * unit
     } else {
-        1
+        unit
     }
 }
 
@@ -440,7 +442,8 @@ pub(crate) fn render(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> V
 fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
     let (w, h) = (frame.width, frame.height);
     let mut out = vec![0u8; w * h * C];
-    let (bw, bh) = (block_size(grid, frame.sx), block_size(grid, frame.sy));
+    // Rows of blocks in whole fours of pixels, as the AVX path shades them.
+    let (bw, bh) = (block_size(grid, frame.sx, 4), block_size(grid, frame.sy, 1));
     #[cfg(target_arch = "x86_64")]
     let avx = std::arch::is_x86_feature_detected!("avx") && !tests::scalar_only();
     let run = |row0: usize, band: &mut [u8]| {
