@@ -445,7 +445,7 @@ fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: boo
     // Rows of blocks in whole fours of pixels, as the AVX path shades them.
     let (bw, bh) = (block_size(grid, frame.sx, 4), block_size(grid, frame.sy, 1));
     #[cfg(target_arch = "x86_64")]
-    let avx = std::arch::is_x86_feature_detected!("avx") && !tests::scalar_only();
+    let avx = std::arch::is_x86_feature_detected!("avx") && !scalar_only();
     let run = |row0: usize, band: &mut [u8]| {
         let mut cands = Cands::<C>::new();
         let rows = band.len() / (w * C);
@@ -749,12 +749,15 @@ mod avx {
     }
 }
 
-/// Test switch for the portable path (outside tests: never).
-#[cfg(not(test))]
-mod tests {
-    pub(super) fn scalar_only() -> bool {
-        false
-    }
+/// Whether renders take the portable path even where AVX is there: never, but in tests.
+#[cfg(all(target_arch = "x86_64", not(test)))]
+fn scalar_only() -> bool {
+    false
+}
+
+#[cfg(all(target_arch = "x86_64", test))]
+fn scalar_only() -> bool {
+    tests::SCALAR_ONLY.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 #[cfg(test)]
@@ -764,13 +767,9 @@ mod tests {
     use super::super::{render_with, Method, RenderOptions};
     use crate::sites::{Point, Quasicrystal};
 
-    /// Whether renders take the portable path even where AVX is there. Both paths give the
-    /// same pictures, so the other tests running meanwhile see no difference.
-    static SCALAR_ONLY: AtomicBool = AtomicBool::new(false);
-
-    pub(super) fn scalar_only() -> bool {
-        SCALAR_ONLY.load(Ordering::Relaxed)
-    }
+    /// See [`super::scalar_only`]. Both paths give the same pictures, so the other tests
+    /// running meanwhile see no difference.
+    pub(super) static SCALAR_ONLY: AtomicBool = AtomicBool::new(false);
 
     fn rng(seed: u64) -> impl FnMut() -> f64 {
         let mut next = crate::testing::xorshift(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
