@@ -442,7 +442,7 @@ pub(crate) fn render(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> V
 fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
     let (w, h) = (frame.width, frame.height);
     let mut out = vec![0u8; w * h * C];
-    // Rows of blocks in whole fours of pixels, as the AVX path shades them.
+    // Blocks a whole number of fours of pixels wide, as the AVX path shades them.
     let (bw, bh) = (block_size(grid, frame.sx, 4), block_size(grid, frame.sy, 1));
     #[cfg(target_arch = "x86_64")]
     let avx = std::arch::is_x86_feature_detected!("avx") && !scalar_only();
