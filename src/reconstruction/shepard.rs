@@ -1,7 +1,7 @@
 //! Shepard interpolation: inverse squared distance weighting of the 4 nearest samples.
 //!
 //! The 4 nearest samples are found exactly. The output is rendered in blocks of pixels about
-//! 1.5 sample spacings wide: each block gathers once, from a uniform grid over the samples,
+//! 1.6 sample spacings wide: each block gathers once, from a uniform grid over the samples,
 //! every sample that can be among the 4 nearest of one of its pixel centres (within
 //! `D4(c) + 2r` of its centre `c`, `r` the half-diagonal), sorted by distance to `c`, and each
 //! pixel scans that list nearest first until no later candidate can come nearer than its 4th.
@@ -415,10 +415,14 @@ impl<const C: usize> Cands<C> {
 }
 
 /// Block side in sample spacings: larger blocks gather candidates for more pixels at once,
-/// smaller ones leave fewer candidates to scan per pixel. (For a 1024² output from 16k, 65k
-/// and 262k sites with the AVX path: 1 ties at 16k and 65k and loses at 262k; 2, 2.5 and 3
-/// lose at 16k. Blocks of any width lost to whole fours: a partial four wastes lanes.)
-const BLOCK: f64 = 1.5;
+/// smaller ones leave fewer candidates to scan per pixel. Blocks are a whole number of fours
+/// of pixels in both directions: wide, because a partial four wastes lanes; tall, because
+/// where samples are dense a block of 3 rows gathers too often. (callgrind, 1024² output from
+/// 16k / 65k / 262k sites, AVX path, per block width × height in pixels: 16k best at 8×8 to
+/// 12×12, 16×16 +7%; 65k best at 8×8, 8×6 +3%, 4×4 +9%; 262k best at 4×4, 4×3 +9%, 8×8
+/// +15%. At 1.6 spacings the sides round to 12, 8 and 4, each well inside its rounding
+/// interval; at 1.5, 65k's 6 px sat on the boundary between 4 and 8.)
+const BLOCK: f64 = 1.6;
 
 /// Output pixels per block side: blocks about `BLOCK` sample spacings wide, in whole `unit`s
 /// (up to 32 pixels).
@@ -444,8 +448,7 @@ pub(crate) fn render(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> V
 fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
     let (w, h) = (frame.width, frame.height);
     let mut out = vec![0u8; w * h * C];
-    // Blocks a whole number of fours of pixels wide, as the AVX path shades them.
-    let (bw, bh) = (block_size(grid, frame.sx, 4), block_size(grid, frame.sy, 1));
+    let (bw, bh) = (block_size(grid, frame.sx, 4), block_size(grid, frame.sy, 4));
     #[cfg(target_arch = "x86_64")]
     let avx = std::arch::is_x86_feature_detected!("avx") && !scalar_only();
     let run = |row0: usize, band: &mut [u8]| {
