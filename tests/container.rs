@@ -918,7 +918,7 @@ fn raw_pack_unpack_every_bit_depth() {
         for &x in &q {
             s.push_str(&format!("{:0width$b}", x, width = bits as usize));
         }
-        while s.len() % 8 != 0 {
+        while !s.len().is_multiple_of(8) {
             s.push('0');
         }
         let expected: Vec<u8> = s

@@ -427,7 +427,7 @@ fn shepard_returns_sample_colour_at_coincident_centre() {
     let mut expect = Vec::new();
     for j in 0..(2 * sh) {
         for i in 0..(2 * sw) {
-            if rng.next() % 7 == 0 {
+            if rng.next().is_multiple_of(7) {
                 pts.push([(i as f64 + 0.5) / 2.0, (j as f64 + 0.5) / 2.0]);
                 let c = [
                     (rng.next() % 256) as u8,

@@ -356,7 +356,7 @@ mod tests {
     #[test]
     fn missing_bytes_are_never_guessed() {
         let mut seed = 3;
-        let bits: Vec<bool> = (0..400).map(|_| lcg(&mut seed) % 2 == 0).collect();
+        let bits: Vec<bool> = (0..400).map(|_| lcg(&mut seed).is_multiple_of(2)).collect();
         let mut p = Prob::default();
         let mut enc = RangeEncoder::new();
         for &b in &bits {
