@@ -761,14 +761,13 @@ mod avx {
         );
         let lo = (_mm_cvtsi128_si64(b) as u64).to_le_bytes();
         let hi = (_mm_extract_epi64::<1>(b) as u64).to_le_bytes();
-        let all = [lo, hi];
-        let all = all.as_flattened();
-        let mut out = [[0u8; C]; 4];
-        for (o, a) in out.iter_mut().zip(all.chunks_exact(4)) {
-            o.copy_from_slice(&a[..C]);
+        // Four bytes per pixel, the first C of each into `px`.
+        for (p, a) in px
+            .chunks_exact_mut(C)
+            .zip([lo, hi].as_flattened().chunks_exact(4))
+        {
+            p.copy_from_slice(&a[..C]);
         }
-        let out = out.as_flattened();
-        px.copy_from_slice(&out[..px.len()]);
     }
 }
 
