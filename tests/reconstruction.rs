@@ -546,6 +546,36 @@ fn rasteriser_is_exact_with_far_vertices() {
     }
 }
 
+/// `rasterise`'s painted mask is exactly the set of pixels some triangle claims, for spans of
+/// every length (the mask is set with fixed-size stores for short spans).
+#[test]
+fn rasterise_marks_exactly_the_claimed_pixels() {
+    use qcs::reconstruction::{rasterise, RasterVertex};
+    let mut rng = Rng(17);
+    let (w, h) = (53u32, 31u32);
+    for case in 0..60 {
+        let size = [1.5, 4.0, 9.0, 20.0, 60.0][case % 5];
+        let tris: Vec<_> = (0..1 + case % 4)
+            .map(|_| {
+                let c = [rng.f() * 60.0 - 4.0, rng.f() * 38.0 - 4.0];
+                [(); 3].map(|_| RasterVertex {
+                    pos: [c[0] + rng.f() * size, c[1] + rng.f() * size],
+                    colour: [rng.f() as f32 * 255.0; 4],
+                })
+            })
+            .collect();
+        let (_, painted) = rasterise(&tris, w, h, 3);
+        let cover = raster_coverage(&tris, w, h);
+        for (k, (&p, &n)) in painted.iter().zip(&cover).enumerate() {
+            assert_eq!(
+                p,
+                n > 0,
+                "case {case}, pixel {k}: painted {p}, claimed {n} times"
+            );
+        }
+    }
+}
+
 /// Every painted pixel is the triangle's plane at its centre, rounded and clamped, also for
 /// planes too steep or colours too far out of range for the fixed-point span loop.
 #[test]

@@ -156,12 +156,15 @@ impl Edge {
     fn first(&self, yc: f64, w: i64) -> i64 {
         let u = self.ah + (yc - self.a[1]) * self.slope;
         if self.inner {
-            // u is within 0..=w − 1 (but for rounding, which `first_exact` sees to).
-            let (i, d) = ceil_frac(u);
-            if d >= self.margin && d <= self.margin1 {
-                return i;
+            // u is within 0..=w − 1 (but for rounding, which `first_exact` sees to). Its
+            // distance e from the nearest integer n decides ⌈u⌉ when it exceeds the margin.
+            let t = u + MAGIC;
+            let e = u - (t - MAGIC);
+            let n = (t.to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64);
+            if e.abs() >= self.margin {
+                return n + (e > 0.0) as i64;
             }
-            return self.first_exact(yc, u, i, w);
+            return self.first_exact(yc, u, n, w);
         }
         // Left of the picture (u < 0) the answer is 0; `first_exact` sees to u < −1 + margin.
         let c = fmin(fmax(u, 0.0), 1e15);
@@ -403,21 +406,45 @@ pub(crate) fn paint_with<const C: usize, S: Shader>(
     band: &mut Band<'_>,
     make: impl Fn() -> S,
 ) {
-    let w = band.width;
-    let rows = (band.row0 as i64, (band.row0 + band.rows) as i64);
+    let (w, row0) = (band.width, band.row0);
+    let rows = (row0 as i64, (row0 + band.rows) as i64);
     let mut shader = None;
     let pixels = &mut *band.pixels;
     let mut painted = band.painted.as_deref_mut();
-    let row0 = band.row0;
     scan(p, rows, w as i64, |j, i0, i1| {
-        let shader = shader.get_or_insert_with(&make);
         let base = (j as usize - row0) * w;
         let (o0, o1) = (base + i0 as usize, base + i1 as usize);
+        let shader = shader.get_or_insert_with(&make);
         shader.fill(&mut pixels[o0 * C..o1 * C], i0, j);
         if let Some(m) = painted.as_deref_mut() {
-            m[o0..o1].fill(true);
+            mark(&mut m[o0..o1]);
         }
     });
+}
+
+/// Sets a span of the painted mask: one or two fixed-size stores for the few pixels a span
+/// usually has, where `fill` alone would call `memset`.
+#[inline(always)]
+fn mark(m: &mut [bool]) {
+    let n = m.len();
+    let mut set = |k: usize, len: usize| m[k..k + len].copy_from_slice(&[true; 8][..len]);
+    match n {
+        0 => {}
+        1..=3 => {
+            set(0, 1);
+            set(n / 2, 1);
+            set(n - 1, 1);
+        }
+        4..=7 => {
+            set(0, 4);
+            set(n - 4, 4);
+        }
+        8..=16 => {
+            set(0, 8);
+            set(n - 8, 8);
+        }
+        _ => m.fill(true),
+    }
 }
 
 /// Paints the pixels of `band` covered by the triangle `v` (and marks them painted).
