@@ -459,12 +459,13 @@ pub(crate) fn paint(v: [&RasterVertex; 3], band: &mut Band<'_>) {
     }
 }
 
-/// Output rows per band of [`paint_groups`]: about 1 MiB of pixels, so that a band stays in
-/// cache while its triangles are drawn, and when `parallel` at most a quarter of a thread's
-/// share of the rows, so that the bands balance. A triangle that crosses bands is set up
-/// once in each, and its divisions cost more time than instructions: on one core, 1024² RGB
-/// (341-row bands) draws 4% / 3% fewer instructions than 32-row bands did from 16k / 65k
-/// sites' triangles, at 1.2 / 1.3 / 1.6× the speed from 16k / 65k / 262k
+/// Output rows per band of [`paint_groups`]: a power of two, at most about 1 MiB of pixels,
+/// so that a band stays in cache while its triangles are drawn, and when `parallel` at most
+/// a quarter of a thread's share of the rows, so that the bands balance. A triangle that
+/// crosses bands is set up once in each, and its divisions cost more time than
+/// instructions: on one core, 1024² RGB in 341-row bands drew 4% / 3% fewer instructions
+/// than 32-row bands from 16k / 65k sites' triangles, at 1.2 / 1.3 / 1.6× the speed from
+/// 16k / 65k / 262k, and 256-row bands (this rule) as fast again
 /// (`cargo bench --bench render -- raster_only`).
 fn band_height(width: usize, height: usize, channels: usize, parallel: bool) -> usize {
     let rows = (1 << 20) / (width * channels).max(1);
@@ -473,7 +474,8 @@ fn band_height(width: usize, height: usize, channels: usize, parallel: bool) -> 
     } else {
         rows
     };
-    rows.max(16)
+    // A power of two, so that binning shifts rather than divides.
+    1 << rows.max(16).ilog2()
 }
 
 /// Paints a `width × height × channels` picture from groups of triangles (e.g. the fan of a
@@ -503,6 +505,7 @@ where
         return (out, painted);
     }
     let band = band_height(w, h, c, parallel);
+    let shift = band.trailing_zeros();
     let nbands = h.div_ceil(band);
     // Counting sort of the groups into the bands they touch (rows whose centre line is in
     // [y0, y1), widened by a margin far beyond rounding).
@@ -511,7 +514,7 @@ where
         let m = 1e-7 * (1.0 + fmax(y0.abs(), y1.abs()));
         let row = |y: f64| ceil_frac(fmin(fmax(y, -1.0), h as f64)).0;
         let (r0, r1) = (row(y0 - 0.5 - m), row(y1 - 0.5 + m).min(h as i64) - 1);
-        (r0 <= r1).then_some((r0.max(0) as usize / band, r1.max(0) as usize / band))
+        (r0 <= r1).then_some((r0.max(0) as usize >> shift, r1.max(0) as usize >> shift))
     };
     let spans: Vec<Option<(usize, usize)>> = (0..groups).map(span).collect();
     let mut start = vec![0u32; nbands + 1];
