@@ -158,9 +158,8 @@ impl Edge {
         if self.inner {
             // u is within 0..=w − 1 (but for rounding, which `first_exact` sees to). Its
             // distance e from the nearest integer n decides ⌈u⌉ when it exceeds the margin.
-            let t = u + MAGIC;
-            let e = u - (t - MAGIC);
-            let n = (t.to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64);
+            let n = round_i64(u);
+            let e = u - ((u + MAGIC) - MAGIC);
             if e.abs() >= self.margin {
                 return n + (e > 0.0) as i64;
             }
