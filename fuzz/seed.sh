@@ -15,3 +15,4 @@ done
 printf '\027\027\002\007\200\007\003\000 gradient pixels 0123456789' > corpus/roundtrip/rgb
 printf '\017\011\000\004\060\002\001\005\000\377\200\177' > corpus/roundtrip/grey-frame
 printf '\003\003\003\000\011\001\000\000' > corpus/roundtrip/rgba-constant
+printf '\027\023\002\010\000\200\003\000 the header defaults bit' > corpus/roundtrip/rgb-defaults

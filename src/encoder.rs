@@ -46,7 +46,7 @@ impl Default for EncodeOptions {
             density: 0.25,
             coding: crate::coding::predictive::Params::default().coding(),
             colour: SampleColour::default(),
-            first_level: 127,
+            first_level: crate::container::DEFAULT_FIRST_LEVEL,
             frame: None,
             icc: None,
             text: Vec::new(),

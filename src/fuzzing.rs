@@ -283,7 +283,7 @@ pub fn header(data: &[u8]) {
     if let Ok((h, len)) = &parsed {
         let len = *len;
         assert!(
-            (9..=container::MAX_HEADER_LEN).contains(&len),
+            (7..=container::MAX_HEADER_LEN).contains(&len),
             "header length {len}"
         );
         // N may be written out where a density byte would do, or several density bytes may
@@ -362,8 +362,16 @@ pub fn roundtrip(data: &[u8]) {
     let layout = Layout::from_channels(1 + byte(ctl, 2) % 4).unwrap_or(Layout::Grey);
     let bits = 1 + byte(ctl, 3) % 8;
     let area = w as u64 * h as u64;
-    let n = 1 + byte(ctl, 4) as u64 % area;
-    let first = 1 + (byte(ctl, 5) % 16) as u64;
+    // A first-level byte with its high bit set asks for the encoder's N and L0, which the
+    // header writes as the format byte's defaults bit.
+    let (n, first) = if byte(ctl, 5) & 0x80 != 0 {
+        ((area / 4).max(1), 127)
+    } else {
+        (
+            1 + byte(ctl, 4) as u64 % area,
+            1 + (byte(ctl, 5) % 16) as u64,
+        )
+    };
     let colour = [
         SampleColour::Nearest,
         SampleColour::Bilinear,

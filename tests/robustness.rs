@@ -600,6 +600,7 @@ fn vectors_through_every_harness() {
         [0u8; 8],
         [7, 5, 2, 4, 48, 3, 3, 0],
         [23, 23, 3, 0, 255, 15, 1, 9],
+        [23, 19, 2, 8, 0, 0x80, 3, 0], // the encoder's N and L0: the header's defaults bit
     ] {
         let mut d = ctl.to_vec();
         d.extend_from_slice(b"some pixels \x00\xff\x80");

@@ -121,6 +121,13 @@ fn vectors() -> Vec<Vector> {
             },
         },
         Vector {
+            name: "rgb-predictive-defaults",
+            what: "RGB, the encoder's defaults: predictive at quality 50, 1 sample per 4 px and \
+                   L0 = 127, so the header leaves both fields out (format byte bit 3)",
+            image: rgb(48, 48),
+            opts: EncodeOptions::default(),
+        },
+        Vector {
             name: "grey-predictive-lossless",
             what: "grey, predictive coding, lossless samples",
             image: grey(32, 32),
@@ -270,6 +277,8 @@ fn vectors_cover_what_the_set_promises() {
     use qcs::container::{inspect, Layout, Metadata};
     let mut layouts = Vec::new();
     let (mut bits5, mut bits8, mut frame, mut text) = (false, false, false, false);
+    // Headers with the format byte's defaults bit and without it.
+    let mut defaults = [false; 2];
     for v in vectors() {
         let bytes = std::fs::read(dir().join(format!("{}.qcs", v.name))).expect("vector");
         assert!(bytes.len() < 4096, "{}: keep vectors tiny", v.name);
@@ -283,6 +292,7 @@ fn vectors_cover_what_the_set_promises() {
             v.name
         );
         layouts.push(h.layout);
+        defaults[usize::from(bytes[2] & 0x08 != 0)] = true;
         bits5 |= h.coding == Coding::Raw { bits: 5 };
         bits8 |= h.coding == Coding::Raw { bits: 8 };
         frame |= h.lattice.is_some();
@@ -294,5 +304,5 @@ fn vectors_cover_what_the_set_promises() {
     for l in [Layout::Grey, Layout::Rgb, Layout::Rgba] {
         assert!(layouts.contains(&l), "{l:?} missing");
     }
-    assert!(bits5 && bits8 && frame && text);
+    assert!(bits5 && bits8 && frame && text && defaults == [true; 2]);
 }

@@ -24,9 +24,17 @@ pub fn header_check(bytes: &[u8]) -> u8 {
 /// The CRC-8/SMBUS table, built at compile time.
 const CRC_8_SMBUS: crc::Crc<u8> = crc::Crc::<u8>::new(&crc::CRC_8_SMBUS);
 
-/// The format byte's bits: lattice fields present, and the coding's and layout's positions.
+/// The format byte's bits: lattice fields present, default density and first level (the
+/// two fields left out), and the coding's and layout's positions.
 const LATTICE_BIT: u8 = 0x10;
+const DEFAULTS_BIT: u8 = 0x08;
 const CODING_SHIFT: u8 = 2;
+
+/// The density byte and first level size that the format byte's defaults bit stands for:
+/// one sample per 4 pixels, 127 samples in level 0 (the encoder's defaults).
+pub(crate) const DEFAULT_DENSITY_BYTE: u8 = 64;
+/// See [`DEFAULT_DENSITY_BYTE`].
+pub(crate) const DEFAULT_FIRST_LEVEL: u64 = 127;
 
 /// Channels per sample and their order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -396,7 +404,8 @@ impl Header {
     }
 
     /// The header's bytes, its check byte ([`header_check`]) last. (Level 0's CRC covers the
-    /// header too.)
+    /// header too.) At the encoder's density and first level size (one sample per 4 pixels,
+    /// 127) the format byte's defaults bit stands for both fields, and they are left out.
     ///
     /// ```
     /// use qcs::container::{Header, Layout, Coding};
@@ -416,20 +425,27 @@ impl Header {
         } else {
             0
         };
+        // Several density bytes may give N; the defaults bit is taken whenever 64 is one of them.
+        let defaults = self.first_level == DEFAULT_FIRST_LEVEL
+            && samples_for_density(self.width, self.height, DEFAULT_DENSITY_BYTE)
+                == self.total_samples;
+        let d = self.density_byte();
         out.push(
             (VERSION << 5)
                 | lattice
+                | if defaults { DEFAULTS_BIT } else { 0 }
                 | (self.coding.id() << CODING_SHIFT)
                 | (self.layout.channels() - 1),
         );
         varint::write_u32(&mut out, self.width);
         varint::write_u32(&mut out, self.height);
-        let d = self.density_byte();
-        out.push(d);
-        if d == 0 {
-            varint::write_u64(&mut out, self.total_samples);
+        if !defaults {
+            out.push(d);
+            if d == 0 {
+                varint::write_u64(&mut out, self.total_samples);
+            }
+            varint::write_u64(&mut out, self.first_level);
         }
-        varint::write_u64(&mut out, self.first_level);
         out.push(match self.coding {
             Coding::Raw { bits } => bits,
             Coding::Predictive { step } => step,
@@ -458,7 +474,7 @@ impl Header {
     }
 
     /// Parses a header from a prefix: `Stop::More` if the bytes end inside it. Errors in the
-    /// magic, the version and the coding, and malformed varints, are reported as soon as their
+    /// magic and the version, and malformed varints, are reported as soon as their
     /// byte arrives; then the check byte; then the value rules.
     pub(crate) fn parse_prefix(bytes: &[u8]) -> Result<(Header, usize), Stop> {
         let mut c = Cursor { bytes, pos: 0 };
@@ -483,15 +499,17 @@ impl Header {
         if version != VERSION {
             return Err(FormatError::UnsupportedVersion { version }.into());
         }
-        let coding_id = (format >> CODING_SHIFT) & 3;
-        if coding_id > 1 {
-            return Err(invalid("coding", 2, coding_id as u64, "0 (raw) or 1 (predictive)").into());
-        }
+        let coding_id = (format >> CODING_SHIFT) & 1;
         let layout = Layout::from_channels((format & 3) + 1).unwrap_or(Layout::Grey);
         let (width, o_w) = c.varint("width", 32)?;
         let (height, o_h) = c.varint("height", 32)?;
+        let defaults = format & DEFAULTS_BIT != 0;
         let mut o_n = c.pos as u64;
-        let d = c.u8()?;
+        let d = if defaults {
+            DEFAULT_DENSITY_BYTE
+        } else {
+            c.u8()?
+        };
         let total = if d == 0 {
             let (n, o) = c.varint("total samples", 64)?;
             o_n = o;
@@ -499,7 +517,11 @@ impl Header {
         } else {
             samples_for_density(width as u32, height as u32, d)
         };
-        let (first, o_l0) = c.varint("first level size", 64)?;
+        let (first, o_l0) = if defaults {
+            (DEFAULT_FIRST_LEVEL, o_n)
+        } else {
+            c.varint("first level size", 64)?
+        };
         let o_param = c.pos as u64;
         let param = c.u8()?;
         let coding = match coding_id {

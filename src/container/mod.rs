@@ -38,6 +38,7 @@ mod parser;
 pub mod varint;
 mod writer;
 
+pub(crate) use header::DEFAULT_FIRST_LEVEL;
 pub use header::{
     header_check, Coding, Header, LatticeFields, Layout, MAGIC, MAX_HEADER_LEN, VERSION,
 };
