@@ -365,7 +365,7 @@ pub fn roundtrip(data: &[u8]) {
     // A first-level byte with its high bit set asks for the encoder's N and L0, which the
     // header writes as the format byte's defaults bit.
     let (n, first) = if byte(ctl, 5) & 0x80 != 0 {
-        ((area / 4).max(1), 127)
+        ((area / 4).max(1), container::DEFAULT_FIRST_LEVEL)
     } else {
         (
             1 + byte(ctl, 4) as u64 % area,

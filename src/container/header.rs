@@ -429,7 +429,6 @@ impl Header {
         let defaults = self.first_level == DEFAULT_FIRST_LEVEL
             && samples_for_density(self.width, self.height, DEFAULT_DENSITY_BYTE)
                 == self.total_samples;
-        let d = self.density_byte();
         out.push(
             (VERSION << 5)
                 | lattice
@@ -440,6 +439,7 @@ impl Header {
         varint::write_u32(&mut out, self.width);
         varint::write_u32(&mut out, self.height);
         if !defaults {
+            let d = self.density_byte();
             out.push(d);
             if d == 0 {
                 varint::write_u64(&mut out, self.total_samples);
