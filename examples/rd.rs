@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --example rd -- [--quality Q | --lossless] [--density D] [--first L0]
-//!     [--colour progressive|area|nearest|bilinear] [--method gouraud|cubic|shepard|natural]
+//!     [--colour fitted|progressive|area|nearest|bilinear] [--method gouraud|cubic|shepard|natural]
 //!     IMAGE...
 //! ```
 //!
@@ -77,6 +77,7 @@ fn main() {
             "--colour" => {
                 opts.colour = match val().as_str() {
                     "progressive" => SampleColour::Progressive,
+                    "fitted" => SampleColour::Fitted,
                     "area" => SampleColour::Area,
                     "nearest" => SampleColour::Nearest,
                     "bilinear" => SampleColour::Bilinear,

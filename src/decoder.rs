@@ -342,7 +342,7 @@ impl StreamDecoder {
         let have = set.len();
         let (sites, col) = self.samples(n);
         for k in have..n as usize {
-            push_site(&mut set, &sites[k], &col[k * c..k * c + c]);
+            set.push_site(&sites[k], &col[k * c..k * c + c]);
         }
         let pixels = set.render(method, width, height);
         self.set = Some(set);
@@ -404,7 +404,7 @@ impl StreamDecoder {
         let (sites, col) = self.samples(k);
         let used = sites.len() as u64;
         for (k, s) in sites.iter().enumerate() {
-            push_site(&mut set, s, &col[k * c..k * c + c]);
+            set.push_site(s, &col[k * c..k * c + c]);
         }
         if let Some(seed) = seed {
             set.seed_cells(seed);
@@ -421,14 +421,6 @@ impl StreamDecoder {
             levels_complete: within,
             is_final: used == h.total_samples && self.verified == h.total_samples,
         })
-    }
-}
-
-/// Pushes a site with its exact lattice point (Gouraud then draws the canonical cells), or
-/// without it if it is beyond the exact range, so that sample indices stay aligned.
-fn push_site(set: &mut SampleSet, site: &Site, colour: &[u8]) {
-    if set.try_push_exact(site.pos, site.lattice, colour).is_err() {
-        set.push(site.pos, colour);
     }
 }
 
@@ -548,7 +540,7 @@ fn push_whole(
         || dec.push(&bytes[head..]),
         move || {
             for s in &sites[..sure] {
-                push_site(&mut set, s, &blank);
+                set.push_site(s, &blank);
             }
             set.into_seed()
         },

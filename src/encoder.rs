@@ -144,7 +144,13 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         Coding::Raw { .. } => None,
     };
     let source = SourceImage::new(&pixels, width, height, channels)?;
-    let colours = source.colours(&positions, opts.colour, n as usize);
+    let colours = match opts.colour {
+        SampleColour::Fitted => {
+            let first = usize::try_from(opts.first_level).unwrap_or(usize::MAX);
+            source.fitted(&sites, seq.frame(), first, n as usize)
+        }
+        rule => source.colours(&positions, rule, n as usize),
+    };
     let mut w = ContainerWriter::new(writer, &header)?;
     for k in 0..header.level_count() {
         let range = header.level_range(k).expect("level below level_count");

@@ -377,7 +377,8 @@ pub fn roundtrip(data: &[u8]) {
         SampleColour::Bilinear,
         SampleColour::Area,
         SampleColour::Progressive,
-    ][(byte(ctl, 6) % 4) as usize];
+        SampleColour::Fitted,
+    ][(byte(ctl, 6) % 5) as usize];
     let c = layout.channels() as usize;
     let len = (w * h) as usize * c;
     let pixels: Vec<u8> = if px.is_empty() {
@@ -407,10 +408,14 @@ pub fn roundtrip(data: &[u8]) {
     // Independent expectation of the sample colours: the sampling rule at the sites, quantised.
     let q = Quasicrystal::with_frame(w, h, frame.unwrap_or_else(|| Frame::default_for(w, h)))
         .expect("frame within bounds");
-    let sites: Vec<_> = q.first(n as usize).into_iter().map(|s| s.pos).collect();
+    let sites = q.first(n as usize);
+    let positions: Vec<_> = sites.iter().map(|s| s.pos).collect();
     let source = SourceImage::new(&pixels, w, h, c).expect("harness buffers match");
-    let expected: Vec<u8> = source
-        .colours(&sites, colour, n as usize)
+    let colours = match colour {
+        SampleColour::Fitted => source.fitted(&sites, q.frame(), first as usize, n as usize),
+        rule => source.colours(&positions, rule, n as usize),
+    };
+    let expected: Vec<u8> = colours
         .iter()
         .map(|&v| raw::dequantise(raw::quantise(v, bits), bits))
         .collect();

@@ -81,6 +81,40 @@ fn psnr_never_drops_as_bytes_are_added() {
 }
 
 #[test]
+fn fitted_colours_draw_every_complete_level_closer_to_the_image() {
+    use qcs::reconstruction::{Method, SampleSet};
+    for path in IMAGES {
+        let img = load(path);
+        let (w, h) = img.dimensions();
+        let n = (w * h / 4) as usize;
+        let seq = Quasicrystal::new(w, h).unwrap();
+        let sites = seq.first(n);
+        let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
+        let src = SourceImage::new(img.as_raw(), w, h, 3).unwrap();
+        let progressive = src.colours(&pos, SampleColour::Progressive, n);
+        let fitted = src.fitted(&sites, seq.frame(), 127, n);
+        assert_eq!(fitted[..127 * 3], progressive[..127 * 3], "{path}: level 0");
+        let draw = |colours: &[u8], e: usize| {
+            let mut set = SampleSet::new(w, h, 3).with_frame(seq.frame());
+            for (s, c) in sites[..e].iter().zip(colours.chunks_exact(3)) {
+                set.push_exact(s.pos, s.lattice, c);
+            }
+            psnr(&set.render(Method::Gouraud, w, h), img.as_raw())
+        };
+        let mut e = 254;
+        while e < 2 * n {
+            let e_ = e.min(n);
+            let (a, b) = (draw(&progressive, e_), draw(&fitted, e_));
+            assert!(
+                b > a + 0.1,
+                "{path}, {e_} samples: fitted {b:.3} dB, progressive {a:.3}"
+            );
+            e *= 2;
+        }
+    }
+}
+
+#[test]
 fn three_times_fewer_bytes_than_raw_at_equal_psnr() {
     let img = load("assets/rocket.png");
     let raw = qcs::encode(&img.clone().into(), &raw8()).unwrap();

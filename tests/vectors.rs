@@ -10,6 +10,7 @@
 
 use image::{DynamicImage, GenericImageView};
 use qcs::container::{Coding, Header};
+use qcs::sampling::SampleColour;
 use qcs::sites::Frame;
 use qcs::{DecodeOptions, EncodeOptions};
 use std::path::{Path, PathBuf};
@@ -67,6 +68,7 @@ fn vectors() -> Vec<Vector> {
         samples: Some(n),
         coding: Coding::Raw { bits },
         first_level: 8,
+        colour: SampleColour::Progressive,
         ..Default::default()
     };
     vec![
@@ -217,8 +219,9 @@ fn regenerate() {
          file with one command,\n\n\
          ```\nQCS_REGENERATE=1 cargo test --release --test vectors\n```\n\n\
          and review the diff. `cargo test` checks them otherwise (and that the encoder still\n\
-         writes the same bytes). The sample colours are the encoder's choice\n\
-         (`SampleColour::Progressive`); the files, not the encoder, are the reference.\n\n\
+         writes the same bytes). The sample colours are the encoder's choice:\n\
+         `SampleColour::Progressive`, but the encoder's default (`SampleColour::Fitted`) in\n\
+         `rgb-predictive-defaults`. The files, not the encoder, are the reference.\n\n\
          | name | size | layout | bits | N | L0 | levels | header bytes | file bytes |\n\
          |---|---|---|---|---|---|---|---|---|\n{table}\n\
          The `sites-*.csv` files are the site-sequence vectors of spec/sites.md (not part of this\n\

@@ -31,10 +31,16 @@ impl From<MethodArg> for Method {
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum ColourArg {
+    /// The pixel containing the site.
     Nearest,
+    /// Bilinear between the four nearest pixel centres.
     Bilinear,
+    /// Mean over the area one site covers in the whole file.
     Area,
+    /// Mean over the area the site covers when it first appears.
     Progressive,
+    /// Progressive, then corrected level by level for the Gouraud preview (best previews).
+    Fitted,
 }
 
 pub use qcs::coding::predictive::DEFAULT_QUALITY;
@@ -64,7 +70,7 @@ pub struct EncodeArgs {
     #[arg(long)]
     pub lossless: bool,
     /// What a sample's colour is.
-    #[arg(long, value_enum, default_value = "progressive")]
+    #[arg(long, value_enum, default_value = "fitted")]
     pub colour: ColourArg,
     /// Text comment to store.
     #[arg(long)]
@@ -104,6 +110,7 @@ impl EncodeArgs {
             ColourArg::Bilinear => SampleColour::Bilinear,
             ColourArg::Area => SampleColour::Area,
             ColourArg::Progressive => SampleColour::Progressive,
+            ColourArg::Fitted => SampleColour::Fitted,
         };
         if let Some(c) = &self.comment {
             o.text.push(("Comment".into(), c.clone()));

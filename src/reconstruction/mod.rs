@@ -186,6 +186,8 @@ pub struct SampleSet {
     lines: Lines,
     /// The triangulated points: every sample, each followed by its mirror points.
     points: Points,
+    /// The index in `points` of each sample.
+    starts: Vec<usize>,
     mesh: Triangulation,
     synced: usize,
     grid: Option<Grid>,
@@ -213,6 +215,7 @@ impl SampleSet {
             colours: Vec::new(),
             lines: Lines::new(frame, source_width, source_height),
             points: Points::default(),
+            starts: Vec::new(),
             mesh: Triangulation::new(),
             synced: 0,
             grid: None,
@@ -341,6 +344,7 @@ impl SampleSet {
         }
         let colour = &self.colours[c0..];
         let points = &mut self.points;
+        self.starts.push(points.positions.len());
         points.push(p, lattice, colour);
         let exact = lattice.map(|x| (&self.lines, x));
         mirror_points(k, p, self.width, self.height, exact, |q, x| {
@@ -349,6 +353,29 @@ impl SampleSet {
             }
         });
         Ok(())
+    }
+
+    /// Pushes a site with its exact lattice point (Gouraud then draws the canonical cells),
+    /// or without it if it is beyond the exact range, so that sample indices stay aligned.
+    pub(crate) fn push_site(&mut self, site: &crate::sites::Site, colour: &[u8]) {
+        if self.try_push_exact(site.pos, site.lattice, colour).is_err() {
+            self.push(site.pos, colour);
+        }
+    }
+
+    /// Sets the colours of the samples from `first` on (and of their mirror points),
+    /// `channels()` bytes each.
+    pub(crate) fn recolour(&mut self, first: usize, colours: &[u8]) {
+        let c = self.channels;
+        let n = self.positions.len();
+        for (k, col) in (first..n).zip(colours.chunks_exact(c)) {
+            self.colours[k * c..(k + 1) * c].copy_from_slice(col);
+            let end = self.starts.get(k + 1).copied();
+            let end = end.unwrap_or(self.points.positions.len());
+            for p in self.starts[k]..end {
+                self.points.colours[p * c..(p + 1) * c].copy_from_slice(col);
+            }
+        }
     }
 
     /// Number of samples.
