@@ -23,6 +23,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("bilinear", SampleColour::Bilinear),
         ("area", SampleColour::Area),
         ("progressive", SampleColour::Progressive),
+        ("fitted (first level 127)", SampleColour::Fitted),
     ];
     let shares = [0.01, 0.05, 0.25, 1.0];
     let counts = [1089usize, 4225, 16641];
@@ -38,14 +39,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let img = image::open(path)?.to_rgb8();
         let (w, h) = img.dimensions();
         let n = (w as usize * h as usize) / 8;
-        let sites: Vec<_> = Quasicrystal::new(w, h)?
-            .first(n)
-            .into_iter()
-            .map(|s| s.pos)
-            .collect();
+        let seq = Quasicrystal::new(w, h)?;
+        let exact = seq.first(n);
+        let sites: Vec<_> = exact.iter().map(|s| s.pos).collect();
         let src = SourceImage::new(img.as_raw(), w, h, 3)?;
         for (r, (_, rule)) in rules.iter().enumerate() {
-            let colours = src.colours(&sites, *rule, n);
+            let colours = match rule {
+                SampleColour::Fitted => src.fitted(&exact, seq.frame(), 127, n),
+                _ => src.colours(&sites, *rule, n),
+            };
             for (s, share) in shares.iter().enumerate() {
                 let k = ((n as f64 * share) as usize).max(3);
                 let px = render(
