@@ -1,8 +1,8 @@
 //! What a sample's colour is: how the encoder reads the source image at a site.
 //!
 //! Measured on the dev photographs (see the README): the fitted colours give the best
-//! previews from 128 bytes up and a better full decode than the progressive area mean they
-//! start from; the plain area mean gives the best full decode of point-like colours.
+//! previews at every byte budget and a better full decode than the progressive area mean they
+//! start from; the plain area mean gives the best full decode with exact colours.
 
 use crate::reconstruction::{Method, RenderOptions, SampleSet};
 use crate::sites::{Frame, Point, Site};
@@ -36,17 +36,17 @@ pub enum SampleColour {
     /// smaller than [`Self::Area`]'s.
     /// Early samples are prefiltered for the sparse preview they belong to.
     Progressive,
-    /// [`Self::Progressive`], then corrected level by level for the Gouraud preview it
-    /// belongs to (the encoder's default). From the second level on, once a level's samples
-    /// have their progressive colours, the encoder renders the picture a decoder draws when
-    /// that level is complete (Gouraud at the source size, the earlier levels at their decoded
-    /// colours) and adds to each of the level's colours [`FIT_SHARE`] × the mean of
-    /// (image − render) over a box [`FIT_BOX`] times the progressive one: one damped
-    /// back-projection step towards the colours whose render matches the image best. The
-    /// first level keeps its progressive colours: its partial prefixes are the smallest
-    /// previews, which the correction made worse (−0.08 dB at 32 bytes).
+    /// [`Self::Progressive`], then corrected stretch by stretch for the Gouraud picture a
+    /// decoder draws when the stretch is complete (the encoder's default). The stretches are
+    /// the file's levels, with the first level split in halves three times: for L0 = 127,
+    /// samples 16..32, 32..64, 64..127, 127..254, 254..508 and so on (the first 16 keep their
+    /// progressive colours). Once a stretch has its progressive colours, the encoder renders
+    /// the samples so far (Gouraud at the source size) and adds to each of the stretch's
+    /// colours [`FIT_SHARE`] × the mean of (image − render) over a box [`FIT_BOX`] times the
+    /// progressive one: one damped back-projection step towards the colours whose picture
+    /// matches the image best.
     ///
-    /// The correction is open loop: the render uses the earlier levels' corrected colours,
+    /// The correction is open loop: the render uses the earlier samples' corrected colours,
     /// not their decoded ones, so that it undoes the interpolation's error and not the
     /// quantiser's (which, fed back, put isolated bright dots in flat skies). It needs the
     /// level structure, so [`SourceImage::fitted`] computes it; [`SourceImage::colours`]
@@ -189,7 +189,8 @@ impl<'a> SourceImage<'a> {
 
     /// The [`SampleColour::Fitted`] colours of `sites`, the first sites (in sequence order)
     /// of a file of `total` samples in the lattice frame `frame`, whose first level holds
-    /// `first_level` samples (each later level ends at twice the count, spec/format.md).
+    /// `first_level` samples (each later level ends at twice the count, spec/format.md):
+    /// see [`SampleColour::Fitted`].
     ///
     /// ```
     /// use qcs::sampling::{SampleColour, SourceImage};
@@ -201,7 +202,7 @@ impl<'a> SourceImage<'a> {
     /// let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
     /// let fitted = src.fitted(&sites, seq.frame(), 50, 400);
     /// let progressive = src.colours(&pos, SampleColour::Progressive, 400);
-    /// assert_eq!(fitted[..50], progressive[..50]); // the first level is not corrected
+    /// assert_eq!(fitted[..7], progressive[..7]); // the first ⌈50 / 8⌉ are not corrected
     /// assert_ne!(fitted, progressive);
     /// // A flat image needs no correction.
     /// let flat = SourceImage::new(&[77; 64 * 64], 64, 64, 1)?;
@@ -219,8 +220,17 @@ impl<'a> SourceImage<'a> {
         let positions: Vec<Point> = sites.iter().map(|s| s.pos).collect();
         let mut colours = self.colours(&positions, SampleColour::Progressive, total);
         let mut set = SampleSet::new(self.width as u32, self.height as u32, c).with_frame(frame);
-        let (mut s, mut e) = (0, first_level.max(1).min(sites.len()));
-        while s < e {
+        // The ends of the corrected stretches: the file's level ends, with the first level
+        // split in halves three times (L0 = 127: 16, 32, 64, 127, 254, 508, …).
+        let n = sites.len();
+        let l0 = first_level.clamp(1, n.max(1));
+        let split = (1..=3).rev().map(|d| l0.div_ceil(1 << d));
+        let levels = std::iter::successors(Some(l0), |&e| (e < n).then(|| e.saturating_mul(2)));
+        let mut s = 0;
+        for e in split.chain(levels).map(|e| e.min(n)) {
+            if e <= s {
+                continue;
+            }
             for (site, colour) in sites[s..e].iter().zip(colours[s * c..].chunks_exact(c)) {
                 set.push_site(site, colour);
             }
@@ -232,7 +242,7 @@ impl<'a> SourceImage<'a> {
                 self.correct(&mut set, s, level, total);
                 set.recolour(s, level);
             }
-            (s, e) = (e, e.saturating_mul(2).min(sites.len()));
+            s = e;
         }
         colours
     }

@@ -81,7 +81,7 @@ fn psnr_never_drops_as_bytes_are_added() {
 }
 
 #[test]
-fn fitted_colours_draw_every_complete_level_closer_to_the_image() {
+fn fitted_colours_draw_every_corrected_stretch_closer_to_the_image() {
     use qcs::reconstruction::{Method, SampleSet};
     for path in IMAGES {
         let img = load(path);
@@ -93,7 +93,11 @@ fn fitted_colours_draw_every_complete_level_closer_to_the_image() {
         let src = SourceImage::new(img.as_raw(), w, h, 3).unwrap();
         let progressive = src.colours(&pos, SampleColour::Progressive, n);
         let fitted = src.fitted(&sites, seq.frame(), 127, n);
-        assert_eq!(fitted[..127 * 3], progressive[..127 * 3], "{path}: level 0");
+        assert_eq!(
+            fitted[..16 * 3],
+            progressive[..16 * 3],
+            "{path}: the first 16"
+        );
         let draw = |colours: &[u8], e: usize| {
             let mut set = SampleSet::new(w, h, 3).with_frame(seq.frame());
             for (s, c) in sites[..e].iter().zip(colours.chunks_exact(3)) {
@@ -101,15 +105,17 @@ fn fitted_colours_draw_every_complete_level_closer_to_the_image() {
             }
             psnr(&set.render(Method::Gouraud, w, h), img.as_raw())
         };
-        let mut e = 254;
-        while e < 2 * n {
-            let e_ = e.min(n);
-            let (a, b) = (draw(&progressive, e_), draw(&fitted, e_));
+        // The ends of the corrected stretches: level 0 (127) split three times, then the levels.
+        let ends = [32, 64].into_iter().chain((0..).map(|k| 127 << k));
+        for e in ends.map(|e| e.min(n)) {
+            let (a, b) = (draw(&progressive, e), draw(&fitted, e));
             assert!(
-                b > a + 0.1,
-                "{path}, {e_} samples: fitted {b:.3} dB, progressive {a:.3}"
+                b > a + 0.05,
+                "{path}, {e} samples: fitted {b:.3} dB, progressive {a:.3}"
             );
-            e *= 2;
+            if e == n {
+                break;
+            }
         }
     }
 }

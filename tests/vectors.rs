@@ -124,7 +124,7 @@ fn vectors() -> Vec<Vector> {
         },
         Vector {
             name: "rgb-predictive-defaults",
-            what: "RGB, the encoder's defaults: predictive at quality 50, 1 sample per 4 px and \
+            what: "RGB, the encoder's defaults: predictive at quality 75, fitted colours, 1 sample per 4 px and \
                    L0 = 127, so the header leaves both fields out (format byte bit 3)",
             image: rgb(48, 48),
             opts: EncodeOptions::default(),
