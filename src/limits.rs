@@ -32,15 +32,15 @@ pub struct Limits {
     /// Largest number of samples (the header's N) that will be decoded and triangulated.
     ///
     /// This is also the bound on the decoder's memory for sites, colours and the triangulation,
-    /// which grows with the samples of the levels begun (never with N itself): about 0.9 KiB per
-    /// sample at peak for a [`crate::StreamDecoder`] rendering all of them (measured: 895 bytes
-    /// per sample for 2^20 samples, Gouraud, before mirror points). Mirror points
-    /// (`spec/reconstruction.md` §2) add a few per sample near the edges: O(√N) in all on an
-    /// ordinary image, at most 8 per sample (about 2 on a strip a few pixels high). The default 2^21 (enough for a 16-megapixel photo
-    /// at the default 1 sample per 8 pixels) bounds that to about 1.8 GiB, reached by a file whose
-    /// levels hold 2^21 samples (which, for a flat picture in the predictive coding, can be a file
-    /// of a few dozen bytes); raise it for larger images, lower it on small machines or for
-    /// untrusted input.
+    /// which grows with the samples of the levels begun (never with N itself): about 450 bytes
+    /// per sample at peak for a one-shot decode of all of them (measured: 1.86 GB for 2^22
+    /// samples, both of a 4096 × 4096 image and of a 32768 × 128 strip, whose mirror points
+    /// (`spec/reconstruction.md` §2) are more; a strip a few pixels high has about 2 per sample
+    /// and needs about 850 bytes per sample). The default 2^22 (a 16-megapixel photo at the
+    /// encoder's default 1 sample per 4 pixels) bounds that to about 1.9 GB, reached by a file
+    /// whose levels hold 2^22 samples (which, for a flat picture in the predictive coding, can
+    /// be a file of a few dozen bytes); raise it for larger images, lower it on small machines
+    /// or for untrusted input.
     pub max_samples: u64,
     /// Largest total size of metadata (ICC, text) kept by a decoder.
     pub max_metadata_bytes: u64,
@@ -52,7 +52,7 @@ impl Default for Limits {
             max_dimension: 1 << 15,
             max_image_pixels: 1 << 28,
             max_output_pixels: 1 << 28,
-            max_samples: 1 << 21,
+            max_samples: 1 << 22,
             max_metadata_bytes: 1 << 24,
         }
     }

@@ -20,6 +20,14 @@ pub const PROGRESSIVE_SCALE: f64 = 0.4;
 pub const FIT_BOX: f64 = 2.0;
 /// See [`FIT_BOX`].
 pub const FIT_SHARE: f64 = 0.75;
+/// [`SampleColour::Fitted`] corrects only the stretches that end at or before this many
+/// samples (the later ones keep their progressive colours), which bounds the encoder's extra
+/// memory to a triangulation of this many samples (about 100 MB).
+pub const FIT_SAMPLES: usize = 1 << 18;
+/// [`SampleColour::Fitted`] compares renders of at most this many pixels with the image: a
+/// larger image is compared at its size divided by the least integer that brings it under
+/// (its box means), which bounds the work of a correction.
+pub const FIT_PIXELS: usize = 1 << 22;
 
 /// How a site's colour is taken from the source image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -156,10 +164,12 @@ impl<'a> SourceImage<'a> {
                         out.push(v.round().clamp(0.0, 255.0) as u8);
                     }
                 }
-                SampleColour::Area => self.box_mean(self.around(*p, final_side), &mut out),
+                SampleColour::Area => {
+                    self.box_mean(around(*p, final_side, self.width, self.height), &mut out)
+                }
                 SampleColour::Progressive | SampleColour::Fitted => {
                     let side = self.progressive_side(k, total);
-                    self.box_mean(self.around(*p, side), &mut out);
+                    self.box_mean(around(*p, side, self.width, self.height), &mut out);
                 }
             }
         }
@@ -171,20 +181,6 @@ impl<'a> SourceImage<'a> {
         let area = (self.width * self.height) as f64;
         let final_side = (area / total.max(1) as f64).sqrt();
         (PROGRESSIVE_SCALE * (area / (k + 1) as f64).sqrt()).max(final_side)
-    }
-
-    /// The pixels `(x0, y0, x1, y1)` (exclusive ends) of a box of `side` centred on `p`,
-    /// within the image and never empty: it holds the pixel containing `p`.
-    fn around(&self, p: Point, side: f64) -> (usize, usize, usize, usize) {
-        let (w, h) = (self.width as f64, self.height as f64);
-        let ix = (p[0].floor().max(0.0) as usize).min(self.width - 1);
-        let iy = (p[1].floor().max(0.0) as usize).min(self.height - 1);
-        let half = side / 2.0;
-        let x0 = ((p[0] - half).round().max(0.0) as usize).min(ix);
-        let y0 = ((p[1] - half).round().max(0.0) as usize).min(iy);
-        let x1 = ((p[0] + half).round().min(w) as usize).max(ix + 1);
-        let y1 = ((p[1] + half).round().min(h) as usize).max(iy + 1);
-        (x0, y0, x1, y1)
     }
 
     /// The [`SampleColour::Fitted`] colours of `sites`, the first sites (in sequence order)
@@ -216,18 +212,33 @@ impl<'a> SourceImage<'a> {
         first_level: usize,
         total: usize,
     ) -> Vec<u8> {
+        self.fitted_within(sites, frame, first_level, total, FIT_PIXELS)
+    }
+
+    /// [`SourceImage::fitted`] comparing renders of at most `max_pixels` pixels.
+    fn fitted_within(
+        &self,
+        sites: &[Site],
+        frame: Frame,
+        first_level: usize,
+        total: usize,
+        max_pixels: usize,
+    ) -> Vec<u8> {
         let c = self.channels;
         let positions: Vec<Point> = sites.iter().map(|s| s.pos).collect();
         let mut colours = self.colours(&positions, SampleColour::Progressive, total);
+        let fit = Fit::new(self, max_pixels);
         let mut set = SampleSet::new(self.width as u32, self.height as u32, c).with_frame(frame);
         // The ends of the corrected stretches: the file's level ends, with the first level
         // split in halves three times (L0 = 127: 16, 32, 64, 127, 254, 508, …).
+        // Only those within the first FIT_SAMPLES samples.
         let n = sites.len();
         let l0 = first_level.clamp(1, n.max(1));
         let split = (1..=3).rev().map(|d| l0.div_ceil(1 << d));
         let levels = std::iter::successors(Some(l0), |&e| (e < n).then(|| e.saturating_mul(2)));
+        let ends = split.chain(levels).map(|e| e.min(n));
         let mut s = 0;
-        for e in split.chain(levels).map(|e| e.min(n)) {
+        for e in ends.take_while(|&e| e <= FIT_SAMPLES) {
             if e <= s {
                 continue;
             }
@@ -239,25 +250,89 @@ impl<'a> SourceImage<'a> {
             }
             if s > 0 {
                 let level = &mut colours[s * c..e * c];
-                self.correct(&mut set, s, level, total);
+                fit.correct(self, &mut set, s, level, total);
                 set.recolour(s, level);
             }
             s = e;
         }
         colours
     }
+}
+
+/// The pixels `(x0, y0, x1, y1)` (exclusive ends) of a box of `side` centred on `p` in a
+/// `w × h` picture, within it and never empty: it holds the pixel containing `p`.
+fn around(p: Point, side: f64, w: usize, h: usize) -> (usize, usize, usize, usize) {
+    let ix = (p[0].floor().max(0.0) as usize).min(w - 1);
+    let iy = (p[1].floor().max(0.0) as usize).min(h - 1);
+    let half = side / 2.0;
+    let x0 = ((p[0] - half).round().max(0.0) as usize).min(ix);
+    let y0 = ((p[1] - half).round().max(0.0) as usize).min(iy);
+    let x1 = ((p[0] + half).round().min(w as f64) as usize).max(ix + 1);
+    let y1 = ((p[1] + half).round().min(h as f64) as usize).max(iy + 1);
+    (x0, y0, x1, y1)
+}
+
+/// The picture [`SampleColour::Fitted`] compares renders with: the image itself, or, when it
+/// has more than [`FIT_PIXELS`] pixels, its box means over `f × f` blocks for the least
+/// integer `f` that brings it under.
+struct Fit<'a> {
+    pixels: std::borrow::Cow<'a, [u8]>,
+    width: usize,
+    height: usize,
+    /// Source pixels per fitted pixel.
+    f: usize,
+}
+
+impl<'a> Fit<'a> {
+    fn new(src: &'a SourceImage<'a>, max_pixels: usize) -> Self {
+        let (w, h) = (src.width, src.height);
+        let f = (1..)
+            .find(|f| w.div_ceil(*f) * h.div_ceil(*f) <= max_pixels.max(1))
+            .expect("f = max(w, h) gives one pixel");
+        if f == 1 {
+            return Fit {
+                pixels: src.pixels.into(),
+                width: w,
+                height: h,
+                f,
+            };
+        }
+        let (fw, fh) = (w.div_ceil(f), h.div_ceil(f));
+        let mut pixels = Vec::with_capacity(fw * fh * src.channels);
+        for y in 0..fh {
+            for x in 0..fw {
+                let b = (x * f, y * f, ((x + 1) * f).min(w), ((y + 1) * f).min(h));
+                src.box_mean(b, &mut pixels);
+            }
+        }
+        Fit {
+            pixels: pixels.into(),
+            width: fw,
+            height: fh,
+            f,
+        }
+    }
 
     /// The correction of [`SampleColour::Fitted`] for the last samples of `set`, the sites
     /// `first..` of a file of `total`, whose colours are `colours` (in the set too).
-    fn correct(&self, set: &mut SampleSet, first: usize, colours: &mut [u8], total: usize) {
-        let (w, h, c) = (self.width, self.height, self.channels);
+    fn correct(
+        &self,
+        src: &SourceImage,
+        set: &mut SampleSet,
+        first: usize,
+        colours: &mut [u8],
+        total: usize,
+    ) {
+        let (w, h, c) = (self.width, self.height, src.channels);
+        // The render's pixel i covers source pixels [i·W/w, (i + 1)·W/w): f each but for the
+        // last, which the box means above cut short (a shift of under one fitted pixel).
         let render = set.render_with(
             Method::Gouraud,
             w as u32,
             h as u32,
             RenderOptions::default(),
         );
-        // Prefix sums of the residual, as those of the image in `new`.
+        // Prefix sums of the residual, as those of the image in `SourceImage::new`.
         let stride = (w + 1) * c;
         let mut sat = vec![0i64; stride * (h + 1)];
         let mut row = vec![0i64; c];
@@ -272,10 +347,12 @@ impl<'a> SourceImage<'a> {
                 }
             }
         }
+        let f = self.f as f64;
         for (j, col) in colours.chunks_exact_mut(c).enumerate() {
             let k = first + j;
-            let side = FIT_BOX * self.progressive_side(k, total);
-            let (x0, y0, x1, y1) = self.around(set.positions()[k], side);
+            let side = FIT_BOX * src.progressive_side(k, total) / f;
+            let p = set.positions()[k];
+            let (x0, y0, x1, y1) = around([p[0] / f, p[1] / f], side, w, h);
             let n = ((x1 - x0) * (y1 - y0)) as f64;
             for (ch, v) in col.iter_mut().enumerate() {
                 let at = |x: usize, y: usize| sat[y * stride + x * c + ch];
@@ -284,6 +361,59 @@ impl<'a> SourceImage<'a> {
                     .round()
                     .clamp(0.0, 255.0) as u8;
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sites::Quasicrystal;
+
+    #[test]
+    fn a_large_image_is_fitted_at_its_block_means() {
+        // 5 × 3 grey, at most 6 pixels: blocks of 2 × 2, the last column and row cut short.
+        let px: Vec<u8> = (0..15).map(|i| i * 10).collect();
+        let src = SourceImage::new(&px, 5, 3, 1).unwrap();
+        let fit = Fit::new(&src, 6);
+        assert_eq!((fit.width, fit.height, fit.f), (3, 2, 2));
+        // (0 + 10 + 50 + 60) / 4 = 30, (40 + 90) / 2 = 65, (100 + 110) / 2 = 105, 140.
+        assert_eq!(&fit.pixels[..], &[30, 50, 65, 105, 125, 140]);
+        assert_eq!(Fit::new(&src, 15).f, 1);
+    }
+
+    #[test]
+    fn fitting_at_half_size_still_draws_every_stretch_closer() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/coffee-150x100.png");
+        let img = image::open(path).unwrap().to_rgb8();
+        let (w, h) = img.dimensions();
+        let n = 2000;
+        let seq = Quasicrystal::new(w, h).unwrap();
+        let sites = seq.first(n);
+        let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
+        let src = SourceImage::new(img.as_raw(), w, h, 3).unwrap();
+        let progressive = src.colours(&pos, SampleColour::Progressive, n);
+        let half = src.fitted_within(&sites, seq.frame(), 127, n, 75 * 50);
+        assert_ne!(half, src.fitted(&sites, seq.frame(), 127, n));
+        let mse = |colours: &[u8], e: usize| {
+            let mut set = SampleSet::new(w, h, 3).with_frame(seq.frame());
+            for (s, c) in sites[..e].iter().zip(colours.chunks_exact(3)) {
+                set.push_site(s, c);
+            }
+            let r = set.render(Method::Gouraud, w, h);
+            let se: f64 = r
+                .iter()
+                .zip(img.as_raw())
+                .map(|(&a, &b)| (a as f64 - b as f64).powi(2))
+                .sum();
+            se / r.len() as f64
+        };
+        for e in [32, 64, 127, 254, 508, 1016, 2000] {
+            let (a, b) = (mse(&progressive, e), mse(&half, e));
+            assert!(
+                b < 0.985 * a,
+                "{e} samples: MSE {b:.1} fitted at half size, {a:.1} progressive"
+            );
         }
     }
 }

@@ -156,6 +156,21 @@ fn limits_hold_in_every_subcommand() {
         "100000000",
     ]));
     assert_eq!(c, Some(4), "{err}");
+    // A file `qcs decode` would refuse is not written: 2100² pixels at 1 sample per pixel
+    // are more samples than the default limit (2^22).
+    let big = scratch("limits-big.png");
+    image::GrayImage::new(2100, 2100).save(&big).unwrap();
+    let qcs_out = scratch("limits-big.qcs");
+    let (c, err) = code(
+        qcs()
+            .arg("encode")
+            .arg(&big)
+            .arg(&qcs_out)
+            .args(["--density", "1"]),
+    );
+    assert_eq!(c, Some(4), "{err}");
+    assert!(err.contains("--density"), "{err}");
+    assert!(!qcs_out.exists());
 }
 
 /// Nonsense numbers are usage errors (exit 2), not a silent one-sample file or exit 1.

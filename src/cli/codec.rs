@@ -122,10 +122,21 @@ impl EncodeArgs {
 fn encode_file(input: &Path, output: &Path, opts: &EncodeOptions) -> Result<(u64, u64)> {
     let img = super::open_image(input)?;
     // A file `qcs decode` would refuse (default limits) is not worth writing.
-    qcs::Limits::default()
+    let limits = qcs::Limits::default();
+    limits
         .check_image(img.width() as u64, img.height() as u64)
         .map_err(qcs::Error::from)
         .with_context(|| format!("cannot encode {}", input.display()))?;
+    limits
+        .check_samples(opts.sample_count(img.width(), img.height()))
+        .map_err(qcs::Error::from)
+        .with_context(|| {
+            format!(
+                "cannot encode {}: `qcs decode` would refuse so many samples; \
+                 lower --density or --samples",
+                input.display()
+            )
+        })?;
     let bytes =
         qcs::encode(&img, opts).with_context(|| format!("cannot encode {}", input.display()))?;
     std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
