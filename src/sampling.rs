@@ -52,7 +52,9 @@ pub enum SampleColour {
     /// the samples so far (Gouraud at the source size) and adds to each of the stretch's
     /// colours [`FIT_SHARE`] × the mean of (image − render) over a box [`FIT_BOX`] times the
     /// progressive one: one damped back-projection step towards the colours whose picture
-    /// matches the image best.
+    /// matches the image best. Only the stretches within the first [`FIT_SAMPLES`] samples are
+    /// corrected, and an image above [`FIT_PIXELS`] pixels is compared at a reduced size, so
+    /// that the cost stays bounded.
     ///
     /// The correction is open loop: the render uses the earlier samples' corrected colours,
     /// not their decoded ones, so that it undoes the interpolation's error and not the
