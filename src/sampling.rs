@@ -231,6 +231,9 @@ impl<'a> SourceImage<'a> {
         let mut colours = self.colours(&positions, SampleColour::Progressive, total);
         let fit = Fit::new(self, max_pixels);
         let mut set = SampleSet::new(self.width as u32, self.height as u32, c).with_frame(frame);
+        if set.channels() != c {
+            return colours; // More than 4 channels: no renderer draws them.
+        }
         // The ends of the corrected stretches: the file's level ends, with the first level
         // split in halves three times (L0 = 127: 16, 32, 64, 127, 254, 508, …).
         // Only those within the first FIT_SAMPLES samples.
@@ -382,6 +385,17 @@ mod tests {
         // (0 + 10 + 50 + 60) / 4 = 30, (40 + 90) / 2 = 65, (100 + 110) / 2 = 105, 140.
         assert_eq!(&fit.pixels[..], &[30, 50, 65, 105, 125, 140]);
         assert_eq!(Fit::new(&src, 15).f, 1);
+    }
+
+    #[test]
+    fn more_than_four_channels_keep_their_progressive_colours() {
+        let px: Vec<u8> = (0..8 * 8 * 5).map(|i| (i * 7 % 256) as u8).collect();
+        let src = SourceImage::new(&px, 8, 8, 5).unwrap();
+        let seq = Quasicrystal::new(8, 8).unwrap();
+        let sites = seq.first(16);
+        let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
+        let progressive = src.colours(&pos, SampleColour::Progressive, 16);
+        assert_eq!(src.fitted(&sites, seq.frame(), 4, 16), progressive);
     }
 
     #[test]
