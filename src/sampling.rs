@@ -229,7 +229,7 @@ impl<'a> SourceImage<'a> {
         let c = self.channels;
         let positions: Vec<Point> = sites.iter().map(|s| s.pos).collect();
         let mut colours = self.colours(&positions, SampleColour::Progressive, total);
-        let fit = Fit::new(self, max_pixels);
+        let mut fit = Fit::new(self, max_pixels);
         let mut set = SampleSet::new(self.width as u32, self.height as u32, c).with_frame(frame);
         if set.channels() != c {
             return colours; // More than 4 channels: no renderer draws them.
@@ -286,6 +286,8 @@ struct Fit<'a> {
     height: usize,
     /// Source pixels per fitted pixel.
     f: usize,
+    /// The residual's prefix sums, kept from one correction to the next.
+    sat: Vec<i64>,
 }
 
 impl<'a> Fit<'a> {
@@ -300,6 +302,7 @@ impl<'a> Fit<'a> {
                 width: w,
                 height: h,
                 f,
+                sat: Vec::new(),
             };
         }
         let (fw, fh) = (w.div_ceil(f), h.div_ceil(f));
@@ -315,13 +318,14 @@ impl<'a> Fit<'a> {
             width: fw,
             height: fh,
             f,
+            sat: Vec::new(),
         }
     }
 
     /// The correction of [`SampleColour::Fitted`] for the last samples of `set`, the sites
     /// `first..` of a file of `total`, whose colours are `colours` (in the set too).
     fn correct(
-        &self,
+        &mut self,
         src: &SourceImage,
         set: &mut SampleSet,
         first: usize,
@@ -338,11 +342,12 @@ impl<'a> Fit<'a> {
             RenderOptions::default(),
         );
         // Prefix sums of the residual, as those of the image in `SourceImage::new`.
+        // Row 0 and column 0 stay 0; every other entry is written.
         let stride = (w + 1) * c;
-        let mut sat = vec![0i64; stride * (h + 1)];
-        let mut row = vec![0i64; c];
+        let sat = &mut self.sat;
+        sat.resize(stride * (h + 1), 0);
         for y in 0..h {
-            row.fill(0);
+            let mut row = [0i64; 4];
             for x in 0..w {
                 for k in 0..c {
                     let i = (y * w + x) * c + k;
@@ -352,6 +357,7 @@ impl<'a> Fit<'a> {
                 }
             }
         }
+        let sat = &self.sat;
         let f = self.f as f64;
         for (j, col) in colours.chunks_exact_mut(c).enumerate() {
             let k = first + j;

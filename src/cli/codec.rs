@@ -39,7 +39,7 @@ pub enum ColourArg {
     Area,
     /// Mean over the area the site covers when it first appears.
     Progressive,
-    /// Progressive, then corrected level by level for the Gouraud preview (best previews).
+    /// Progressive, then corrected for the Gouraud picture of each level (best previews).
     Fitted,
 }
 
