@@ -25,6 +25,9 @@ pub struct DecodedImage {
     pub levels_complete: u32,
     /// Whether this is the final picture: every sample of the file, all verified.
     pub is_final: bool,
+    /// The file's ICC colour profile, if it has one and its chunk (after the first level) was
+    /// received and verified: the colour space the pixels are in. `None` means sRGB.
+    pub icc: Option<Vec<u8>>,
 }
 
 /// A render of a [`StreamDecoder`]: a preview while samples are missing, or the final picture.
@@ -303,6 +306,26 @@ impl StreamDecoder {
         &self.metadata
     }
 
+    /// The file's ICC colour profile, once its chunk is received and verified (`None` before,
+    /// and for a file without one: sRGB).
+    ///
+    /// ```
+    /// use qcs::{EncodeOptions, StreamDecoder};
+    /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::new(8, 8));
+    /// let opts = EncodeOptions { icc: Some(b"a profile".to_vec()), ..Default::default() };
+    /// let bytes = qcs::encode(&img, &opts)?;
+    /// let mut dec = StreamDecoder::new(qcs::Limits::default());
+    /// dec.push(&bytes)?;
+    /// assert_eq!(dec.icc_profile(), Some(&b"a profile"[..]));
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn icc_profile(&self) -> Option<&[u8]> {
+        self.metadata.iter().find_map(|m| match m {
+            Metadata::Icc(icc) => Some(&icc[..]),
+            Metadata::Text { .. } => None,
+        })
+    }
+
     /// Sites (exact lattice point and pixel position) and colours (in the file's layout) of
     /// the first `k` available samples, e.g. for the stylized renderers.
     pub fn samples(&mut self, k: u64) -> (&[Site], &[u8]) {
@@ -352,6 +375,7 @@ impl StreamDecoder {
             samples_verified: self.verified.min(n),
             levels_complete: self.levels_complete,
             is_final: self.is_complete(),
+            icc: self.icc_profile().map(<[u8]>::to_vec),
         };
         Ok(if decoded.is_final {
             Picture::Final(decoded)
@@ -420,6 +444,7 @@ impl StreamDecoder {
             samples_verified: self.verified.min(used),
             levels_complete: within,
             is_final: used == h.total_samples && self.verified == h.total_samples,
+            icc: self.icc_profile().map(<[u8]>::to_vec),
         })
     }
 }

@@ -1,7 +1,7 @@
 //! `image` crate integration: an [`image::ImageDecoder`] for `.qcs`, and registration through
 //! `image`'s decoding hooks so that `image::open("photo.qcs")` works.
 
-use crate::container::{Header, Layout};
+use crate::container::{Event, Header, Layout, Metadata, Parser, ParserOptions};
 use crate::{decode, DecodeOptions, Error, Limits, StreamDecoder};
 use image::error::{DecodingError, ImageFormatHint, LimitError, LimitErrorKind};
 use image::{ColorType, ImageDecoder, ImageError, ImageResult};
@@ -77,6 +77,36 @@ impl ImageDecoder for QcsImageDecoder {
             Layout::GreyAlpha => ColorType::La8,
             Layout::Rgb => ColorType::Rgb8,
             Layout::Rgba => ColorType::Rgba8,
+        }
+    }
+
+    /// The file's ICC profile (its chunk follows the first level, and counts once its CRC is
+    /// checked), so that colour-managed callers can convert the pixels.
+    ///
+    /// ```
+    /// use image::ImageDecoder;
+    /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::new(8, 8));
+    /// let opts = qcs::EncodeOptions { icc: Some(b"a profile".to_vec()), ..Default::default() };
+    /// let bytes = qcs::encode(&img, &opts)?;
+    /// let mut dec = qcs::QcsImageDecoder::new(std::io::Cursor::new(bytes))?;
+    /// assert_eq!(dec.icc_profile()?, Some(b"a profile".to_vec()));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    fn icc_profile(&mut self) -> ImageResult<Option<Vec<u8>>> {
+        let mut parser = Parser::new(ParserOptions::with_limits(self.limits.clone()));
+        let mut events = Vec::new();
+        let parsed = parser.push(&self.bytes, &mut events);
+        let icc = events.into_iter().find_map(|e| match e {
+            Event::Metadata {
+                metadata: Metadata::Icc(icc),
+                ..
+            } => Some(icc),
+            _ => None,
+        });
+        match (icc, parsed) {
+            (Some(icc), _) => Ok(Some(icc)),
+            (None, Ok(())) => Ok(None),
+            (None, Err(e)) => Err(to_image_error(e)),
         }
     }
 

@@ -304,3 +304,76 @@ fn frames_stop_at_the_byte_budget() {
     assert!(!names.is_empty());
     assert!(names.iter().all(|n| n.contains("preview")), "{names:?}");
 }
+
+/// A camera's picture: a 24 × 16 PNG, left half red and right half blue, whose Exif says
+/// "rotate 90° clockwise" to be upright, with an ICC profile that is not sRGB.
+fn camera_png(name: &str, icc: &[u8]) -> PathBuf {
+    use image::ImageEncoder;
+    let img = image::RgbImage::from_fn(24, 16, |x, _| {
+        image::Rgb(if x < 12 { [220, 20, 20] } else { [20, 20, 220] })
+    });
+    // Big-endian TIFF header, one IFD entry: Orientation (0x0112), SHORT, 1 value: 6.
+    let exif = [
+        b'M', b'M', 0, 42, 0, 0, 0, 8, 0, 1, 0x01, 0x12, 0, 3, 0, 0, 0, 1, 0, 6, 0, 0, 0, 0, 0, 0,
+    ];
+    let mut bytes = Vec::new();
+    let mut enc = image::codecs::png::PngEncoder::new(&mut bytes);
+    enc.set_icc_profile(icc.to_vec()).expect("PNG holds ICC");
+    enc.set_exif_metadata(exif.to_vec())
+        .expect("PNG holds Exif");
+    enc.write_image(img.as_raw(), 24, 16, image::ExtendedColorType::Rgb8)
+        .expect("PNG");
+    let path = scratch(name);
+    std::fs::write(&path, bytes).expect("write");
+    path
+}
+
+/// The ICC profile of a PNG, if any.
+fn png_icc(path: &PathBuf) -> Option<Vec<u8>> {
+    use image::ImageDecoder;
+    let file = std::io::BufReader::new(std::fs::File::open(path).expect("open"));
+    let mut dec = image::codecs::png::PngDecoder::new(file).expect("a PNG");
+    dec.icc_profile().expect("readable")
+}
+
+/// `qcs encode` stores a photo upright (its Exif orientation applied) with its colour
+/// profile, and `qcs decode` writes the profile back, unless `--strip-icc` drops it.
+#[test]
+fn orientation_and_colour_profile_survive_a_round_trip() {
+    let icc = b"a Display P3 profile, as far as this test cares".to_vec();
+    let src = camera_png("camera.png", &icc);
+    let (file, back) = (scratch("camera.qcs"), scratch("camera-back.png"));
+    let enc = run(qcs().args(["encode", "--lossless"]).arg(&src).arg(&file));
+    assert!(enc.status.success(), "{enc:?}");
+    let said = String::from_utf8_lossy(&enc.stderr);
+    assert!(
+        said.contains(&format!("its {}-byte ICC profile", icc.len())),
+        "{said}"
+    );
+    let dec = run(qcs().args(["-q", "decode"]).arg(&file).arg(&back));
+    assert!(dec.status.success(), "{dec:?}");
+    let img = image::open(&back).expect("a PNG").to_rgb8();
+    // Upright: 16 wide, 24 high, the left half (red) now on top.
+    assert_eq!(img.dimensions(), (16, 24));
+    let (top, bottom) = (img.get_pixel(8, 3).0, img.get_pixel(8, 20).0);
+    assert!(top[0] > 180 && top[2] < 60, "top {top:?}");
+    assert!(bottom[2] > 180 && bottom[0] < 60, "bottom {bottom:?}");
+    assert_eq!(png_icc(&back), Some(icc.clone()));
+
+    // Dropped on request.
+    let stripped = scratch("camera-stripped.qcs");
+    let enc = run(qcs()
+        .args(["-q", "encode", "--strip-icc"])
+        .arg(&src)
+        .arg(&stripped));
+    assert!(enc.status.success(), "{enc:?}");
+    let dec = run(qcs().args(["-q", "decode"]).arg(&stripped).arg(&back));
+    assert!(dec.status.success(), "{dec:?}");
+    assert_eq!(png_icc(&back), None);
+
+    // A format without profiles: written, with a warning.
+    let bmp = scratch("camera-back.bmp");
+    let dec = run(qcs().arg("decode").arg(&file).arg(&bmp));
+    assert!(dec.status.success(), "{dec:?}");
+    assert!(String::from_utf8_lossy(&dec.stderr).contains("cannot hold the file's ICC"));
+}

@@ -75,6 +75,11 @@ pub struct EncodeArgs {
     /// Text comment to store.
     #[arg(long)]
     pub comment: Option<String>,
+    /// Drop the input's ICC colour profile. By default it is stored (after the first level,
+    /// so the first preview does not wait for it), unless it describes sRGB, which a file
+    /// without a profile means anyway.
+    #[arg(long)]
+    pub strip_icc: bool,
 }
 
 fn parse_density(s: &str) -> Result<f64, String> {
@@ -119,8 +124,23 @@ impl EncodeArgs {
     }
 }
 
-fn encode_file(input: &Path, output: &Path, opts: &EncodeOptions) -> Result<(u64, u64)> {
-    let img = super::open_image(input)?;
+/// What [`encode_file`] wrote: the input's and the output's size, and the size of the ICC
+/// profile stored, if any.
+struct Encoded {
+    input: u64,
+    output: u64,
+    icc: Option<usize>,
+}
+
+fn encode_file(
+    input: &Path,
+    output: &Path,
+    opts: &EncodeOptions,
+    strip_icc: bool,
+) -> Result<Encoded> {
+    let (img, icc) = super::read_image(input)?;
+    let mut opts = opts.clone();
+    opts.icc = icc.filter(|icc| !strip_icc && !super::is_srgb(icc));
     // A file `qcs decode` would refuse (default limits) is not worth writing.
     let limits = qcs::Limits::default();
     limits
@@ -137,13 +157,30 @@ fn encode_file(input: &Path, output: &Path, opts: &EncodeOptions) -> Result<(u64
                 input.display()
             )
         })?;
+    let metadata: usize = opts.icc.as_ref().map_or(0, Vec::len)
+        + opts
+            .text
+            .iter()
+            .map(|(k, v)| k.len() + 1 + v.len())
+            .sum::<usize>();
+    limits
+        .check_metadata(metadata as u64)
+        .map_err(qcs::Error::from)
+        .with_context(|| {
+            format!(
+                "cannot encode {}: `qcs decode` would refuse so much metadata; \
+                 use --strip-icc or a shorter --comment",
+                input.display()
+            )
+        })?;
     let bytes =
-        qcs::encode(&img, opts).with_context(|| format!("cannot encode {}", input.display()))?;
+        qcs::encode(&img, &opts).with_context(|| format!("cannot encode {}", input.display()))?;
     std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
-    Ok((
-        std::fs::metadata(input).map(|m| m.len()).unwrap_or(0),
-        bytes.len() as u64,
-    ))
+    Ok(Encoded {
+        input: std::fs::metadata(input).map(|m| m.len()).unwrap_or(0),
+        output: bytes.len() as u64,
+        icc: opts.icc.as_ref().map(Vec::len),
+    })
 }
 
 fn out_path(dir: &Path, input: &Path) -> PathBuf {
@@ -185,14 +222,17 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
                 a.paths[1].display()
             );
         }
-        let (i, o) = encode_file(&a.paths[0], &a.paths[1], &opts)?;
+        let e = encode_file(&a.paths[0], &a.paths[1], &opts, a.strip_icc)?;
         if !quiet {
             eprintln!(
-                "{} → {}: {} → {} bytes",
+                "{} → {}: {} → {} bytes{}",
                 a.paths[0].display(),
                 a.paths[1].display(),
-                i,
-                o
+                e.input,
+                e.output,
+                e.icc
+                    .map(|n| format!(" (with its {n}-byte ICC profile)"))
+                    .unwrap_or_default()
             );
         }
         return Ok(());
@@ -233,10 +273,10 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}").expect("valid template"),
     );
-    let results: Vec<Result<(u64, u64)>> = inputs
+    let results: Vec<Result<Encoded>> = inputs
         .par_iter()
         .map(|p| {
-            let r = encode_file(p, &out_path(dir, p), &opts);
+            let r = encode_file(p, &out_path(dir, p), &opts, a.strip_icc);
             bar.inc(1);
             r
         })
@@ -246,10 +286,10 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
     let mut first_err = None;
     for (p, r) in inputs.iter().zip(results) {
         match r {
-            Ok((i, o)) => {
+            Ok(e) => {
                 ok += 1;
-                bin += i;
-                bout += o;
+                bin += e.input;
+                bout += e.output;
             }
             Err(e) => {
                 eprintln!("qcs: {}: {e:#}", p.display());
@@ -353,7 +393,14 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
         ..Default::default()
     };
     let d = qcs::decode(&bytes, &opts).with_context(ctx)?;
-    super::save_image(&d.image, out)?;
+    let kept = super::save_image_icc(&d.image, out, d.icc.as_deref())?;
+    if !kept && !quiet {
+        eprintln!(
+            "qcs: warning: {} cannot hold the file's ICC colour profile: its colours are not sRGB \
+             and will look wrong; write PNG, JPEG, TIFF or WebP to keep it",
+            out.display()
+        );
+    }
     if !quiet {
         eprintln!(
             "{}: {}×{} from {} samples ({} verified, {} levels){}",
@@ -396,7 +443,8 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
         let pic = dec.render(a.method.into(), size.0, size.1)?;
         let kind = if pic.is_final() { "final" } else { "preview" };
         let path = dir.join(format!("frame-{n:03}-{cut:08}B-{kind}.png"));
-        super::save_image(&pic.decoded().image, &path)?;
+        let d = pic.decoded();
+        super::save_image_icc(&d.image, &path, d.icc.as_deref())?;
         if !quiet {
             eprintln!("{}: {} samples", path.display(), pic.decoded().samples_used);
         }

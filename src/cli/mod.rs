@@ -170,15 +170,77 @@ pub const SAMPLERS: [&str; 6] = [
     "farthest",
 ];
 
-/// Reads an image, recognising its format by content (as `render` does), not by extension.
+/// Reads an image, recognising its format by content (as `render` does), not by extension,
+/// upright: its Exif orientation (a camera's "rotate 90°") is applied to the pixels.
 pub fn open_image(p: &std::path::Path) -> anyhow::Result<image::DynamicImage> {
+    Ok(read_image(p)?.0)
+}
+
+/// [`open_image`], and the image's ICC colour profile if it has one.
+///
+/// Orientation and profile are metadata: one that cannot be read leaves the image as it
+/// is (unrotated, sRGB) rather than refusing it.
+pub fn read_image(p: &std::path::Path) -> anyhow::Result<(image::DynamicImage, Option<Vec<u8>>)> {
     use anyhow::Context;
+    use image::ImageDecoder;
     let ctx = || format!("cannot read image {}", p.display());
-    image::ImageReader::open(p)
+    let mut decoder = image::ImageReader::open(p)
         .map_err(image::ImageError::IoError)
         .and_then(|r| r.with_guessed_format().map_err(image::ImageError::IoError))
-        .and_then(|r| r.decode())
-        .with_context(ctx)
+        .and_then(|r| r.into_decoder())
+        .with_context(ctx)?;
+    let icc = decoder.icc_profile().ok().flatten();
+    let orientation = decoder
+        .orientation()
+        .unwrap_or(image::metadata::Orientation::NoTransforms);
+    let mut img = image::DynamicImage::from_decoder(decoder).with_context(ctx)?;
+    img.apply_orientation(orientation);
+    Ok((img, icc))
+}
+
+/// Whether an ICC profile describes sRGB (an RGB profile whose description names it, as
+/// "sRGB IEC61966-2.1" or "sRGB built-in" do): storing it would only repeat what a file
+/// without a profile means. Reads the `desc` tag, ICC v2 (`desc`) or v4 (`mluc`, UTF-16).
+pub fn is_srgb(icc: &[u8]) -> bool {
+    let u32_at = |at: usize| -> Option<usize> {
+        let b = icc.get(at..at.checked_add(4)?)?;
+        Some(u32::from_be_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let desc = || -> Option<String> {
+        if icc.get(16..20)? != b"RGB " {
+            return None;
+        }
+        let tags = u32_at(128)?;
+        let (at, len) = (0..tags.min(1024)).find_map(|i| {
+            let e = 132 + 12 * i;
+            if icc.get(e..e + 4)? != b"desc" {
+                return None;
+            }
+            Some((u32_at(e + 4)?, u32_at(e + 8)?))
+        })?;
+        let tag = icc.get(at..at.checked_add(len)?)?;
+        match tag.get(..4)? {
+            b"desc" => {
+                let n = u32_at(at + 8)?;
+                Some(String::from_utf8_lossy(tag.get(12..12usize.checked_add(n)?)?).into())
+            }
+            b"mluc" => {
+                // The first record: its length and offset from the tag's start.
+                let (n, off) = (u32_at(at + 20)?, u32_at(at + 24)?);
+                let text = tag.get(off..off.checked_add(n)?)?;
+                let units = text
+                    .chunks_exact(2)
+                    .map(|c| u16::from_be_bytes([c[0], c[1]]));
+                Some(
+                    char::decode_utf16(units)
+                        .map(|c| c.unwrap_or('?'))
+                        .collect(),
+                )
+            }
+            _ => None,
+        }
+    };
+    desc().is_some_and(|d| d.contains("sRGB"))
 }
 
 /// The image format an output path's extension names.
@@ -195,24 +257,56 @@ pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageForma
 /// RGB(A) for encoders that lack them (GIF, QOI, TIFF), and creating the file only once the
 /// whole image is encoded (no empty or partial file on error).
 pub fn save_image(img: &image::DynamicImage, path: &std::path::Path) -> anyhow::Result<()> {
+    save_image_icc(img, path, None).map(|_| ())
+}
+
+/// [`save_image`] with an ICC colour profile, embedded when the format can hold one (PNG,
+/// JPEG, TIFF, WebP). Returns whether the profile was written (`true` without one).
+pub fn save_image_icc(
+    img: &image::DynamicImage,
+    path: &std::path::Path,
+    icc: Option<&[u8]>,
+) -> anyhow::Result<bool> {
     use anyhow::Context;
+    use image::codecs::{jpeg, png, tiff, webp};
+    use image::{ImageEncoder, ImageFormat};
+    /// Writes `img` with `enc` carrying `icc`, or `None` if `enc` refuses profiles.
+    fn with_icc<E: ImageEncoder>(
+        img: &image::DynamicImage,
+        mut enc: E,
+        icc: &[u8],
+    ) -> Option<image::ImageResult<()>> {
+        enc.set_icc_profile(icc.to_vec()).ok()?;
+        Some(img.write_with_encoder(enc))
+    }
     let format = output_format(path)?;
-    let mut buf = std::io::Cursor::new(Vec::new());
-    if let Err(e) = img.write_to(&mut buf, format) {
-        if !matches!(e, image::ImageError::Unsupported(_)) {
-            anyhow::bail!("cannot write {}: {e}", path.display());
-        }
-        buf = std::io::Cursor::new(Vec::new());
+    let write = |img: &image::DynamicImage| -> (Vec<u8>, image::ImageResult<()>, bool) {
+        let mut buf = std::io::Cursor::new(Vec::new());
+        let embedded = icc.and_then(|icc| match format {
+            ImageFormat::Png => with_icc(img, png::PngEncoder::new(&mut buf), icc),
+            ImageFormat::Jpeg => with_icc(img, jpeg::JpegEncoder::new(&mut buf), icc),
+            ImageFormat::Tiff => with_icc(img, tiff::TiffEncoder::new(&mut buf), icc),
+            ImageFormat::WebP => with_icc(img, webp::WebPEncoder::new_lossless(&mut buf), icc),
+            _ => None,
+        });
+        let (result, kept) = match embedded {
+            Some(r) => (r, true),
+            None => (img.write_to(&mut buf, format), icc.is_none()),
+        };
+        (buf.into_inner(), result, kept)
+    };
+    let (mut bytes, mut result, mut kept) = write(img);
+    if matches!(result, Err(image::ImageError::Unsupported(_))) {
         let wide = if img.color().has_alpha() {
             image::DynamicImage::ImageRgba8(img.to_rgba8())
         } else {
             image::DynamicImage::ImageRgb8(img.to_rgb8())
         };
-        wide.write_to(&mut buf, format)
-            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+        (bytes, result, kept) = write(&wide);
     }
-    std::fs::write(path, buf.into_inner())
-        .with_context(|| format!("cannot write {}", path.display()))
+    result.map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+    std::fs::write(path, bytes).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(kept)
 }
 
 /// A sampler by its CLI name (the quasicrystal included).
@@ -232,4 +326,65 @@ pub fn sampler_by_name(
         "farthest" => Box::new(FarthestPoint { seed }),
         _ => return None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::is_srgb;
+
+    /// A minimal RGB profile whose only tag is `desc`, holding `tag`.
+    fn profile(tag: &[u8]) -> Vec<u8> {
+        let mut p = vec![0u8; 128];
+        p[16..20].copy_from_slice(b"RGB ");
+        p.extend_from_slice(&1u32.to_be_bytes());
+        p.extend_from_slice(b"desc");
+        p.extend_from_slice(&144u32.to_be_bytes());
+        p.extend_from_slice(&(tag.len() as u32).to_be_bytes());
+        p.extend_from_slice(tag);
+        p
+    }
+
+    /// A v2 `desc` tag.
+    fn v2(text: &str) -> Vec<u8> {
+        let mut t = b"desc\0\0\0\0".to_vec();
+        t.extend_from_slice(&(text.len() as u32 + 1).to_be_bytes());
+        t.extend_from_slice(text.as_bytes());
+        t.push(0);
+        profile(&t)
+    }
+
+    /// A v4 `mluc` tag with one record.
+    fn v4(text: &str) -> Vec<u8> {
+        let utf16: Vec<u8> = text.encode_utf16().flat_map(u16::to_be_bytes).collect();
+        let mut t = b"mluc\0\0\0\0".to_vec();
+        for n in [1u32, 12] {
+            t.extend_from_slice(&n.to_be_bytes());
+        }
+        t.extend_from_slice(b"enUS");
+        t.extend_from_slice(&(utf16.len() as u32).to_be_bytes());
+        t.extend_from_slice(&28u32.to_be_bytes());
+        t.extend_from_slice(&utf16);
+        profile(&t)
+    }
+
+    #[test]
+    fn srgb_profiles_are_recognised_by_their_description() {
+        assert!(is_srgb(&v2("sRGB IEC61966-2.1")));
+        assert!(is_srgb(&v4("sRGB built-in")));
+        assert!(!is_srgb(&v2("Display P3")));
+        assert!(!is_srgb(&v4("Adobe RGB (1998)")));
+        // A grey profile is not sRGB whatever it says.
+        let mut grey = v2("sRGB");
+        grey[16..20].copy_from_slice(b"GRAY");
+        assert!(!is_srgb(&grey));
+        // Cut or garbled profiles are not sRGB (and do not panic).
+        let whole = v4("sRGB built-in");
+        for n in 0..whole.len() {
+            assert!(!is_srgb(&whole[..n]), "cut at {n}");
+        }
+        let mut far = v2("sRGB");
+        far[136..140].copy_from_slice(&u32::MAX.to_be_bytes());
+        assert!(!is_srgb(&far));
+        assert!(!is_srgb(b"not a profile"));
+    }
 }
