@@ -411,10 +411,12 @@ impl StreamDecoder {
         Ok(())
     }
 
-    /// Renders from the first `k` available samples only (a fresh set, not the kept one),
-    /// extending `seed`, the cells of the first samples, if given.
+    /// Renders from the first `k` available samples only (a fresh set), extending `seed`, the
+    /// cells of the first samples, if given. A one-shot decode's last step: the decoder is
+    /// consumed, so that what the picture no longer needs (the colour decoder's state, the
+    /// sites, the cells' insertion structure) is freed before the picture is allocated.
     fn render_prefix(
-        &mut self,
+        mut self,
         k: u64,
         method: Method,
         width: u32,
@@ -423,28 +425,35 @@ impl StreamDecoder {
     ) -> Result<DecodedImage> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
+        self.predictive = None;
+        self.set = None;
         let c = self.channels();
         let mut set = self.new_set(&h);
         let (sites, col) = self.samples(k);
         let used = sites.len() as u64;
+        set.reserve(sites.len());
         for (k, s) in sites.iter().enumerate() {
             set.push_site(s, &col[k * c..k * c + c]);
         }
         if let Some(seed) = seed {
             set.seed_cells(seed);
         }
-        let pixels = set.render(method, width, height);
+        let icc = self.icc_profile().map(<[u8]>::to_vec);
         // Levels complete within the samples used.
         let within = (0..self.levels_complete)
             .take_while(|&l| h.level_range(l).is_some_and(|r| r.end <= used))
             .count() as u32;
+        let (verified, levels) = (self.verified, within);
+        drop(self);
+        set.settle(method);
+        let pixels = set.render(method, width, height);
         Ok(DecodedImage {
             image: to_image(h.layout, width, height, pixels),
             samples_used: used,
-            samples_verified: self.verified.min(used),
-            levels_complete: within,
-            is_final: used == h.total_samples && self.verified == h.total_samples,
-            icc: self.icc_profile().map(<[u8]>::to_vec),
+            samples_verified: verified.min(used),
+            levels_complete: levels,
+            is_final: used == h.total_samples && verified == h.total_samples,
+            icc,
         })
     }
 }
@@ -564,6 +573,7 @@ fn push_whole(
     let (pushed, seed) = rayon::join(
         || dec.push(&bytes[head..]),
         move || {
+            set.reserve(sure);
             for s in &sites[..sure] {
                 set.push_site(s, &blank);
             }

@@ -32,15 +32,15 @@ pub struct Limits {
     /// Largest number of samples (the header's N) that will be decoded and triangulated.
     ///
     /// This is also the bound on the decoder's memory for sites, colours and the triangulation,
-    /// which grows with the samples of the levels begun (never with N itself): about 450 bytes
-    /// per sample at peak for a one-shot decode of all of them (measured: 1.86 GB for 2^22
-    /// samples, both of a 4096 × 4096 image and of a 32768 × 128 strip, whose mirror points
-    /// (`spec/reconstruction.md` §2) are more; a strip a few pixels high has about 2 per sample
-    /// and needs about 850 bytes per sample). The default 2^22 (a 16-megapixel photo at the
-    /// encoder's default 1 sample per 4 pixels) bounds that to about 1.9 GB, reached by a file
-    /// whose levels hold 2^22 samples (which, for a flat picture in the predictive coding, can
-    /// be a file of a few dozen bytes); raise it for larger images, lower it on small machines
-    /// or for untrusted input.
+    /// which grows with the samples of the levels begun (never with N itself). A one-shot
+    /// decode of all of them peaks at about 380 bytes per sample on two threads (the cells are
+    /// built while the colours decode) and 260 on one (measured: 1.59 GB and 1.10 GB for
+    /// 2^22 samples of a 4096 × 4096 image; a 32768 × 128 strip, whose mirror points
+    /// (`spec/reconstruction.md` §2) are more, 410 and 294 bytes per sample). The default 2^22
+    /// (a 16-megapixel photo at the encoder's default 1 sample per 4 pixels) bounds that to
+    /// about 1.6 GB, reached by a file whose levels hold 2^22 samples (which, for a flat
+    /// picture in the predictive coding, can be a file of a few dozen bytes); raise it for
+    /// larger images, lower it on small machines or for untrusted input.
     pub max_samples: u64,
     /// Largest total size of metadata (ICC, text) kept by a decoder.
     pub max_metadata_bytes: u64,

@@ -348,7 +348,8 @@ impl LiveCells {
     /// or anything unexpected) the state is unusable and the caller builds afresh.
     pub(crate) fn extend(&mut self, lattice: &[Option<ZZeta>]) -> Result<(), Rebuild> {
         let new = lattice.len().saturating_sub(self.points);
-        let mut touched = Vec::with_capacity(8 * new);
+        // Which triangles an insertion made or rewrote (by triangle id).
+        let mut touched = vec![false; self.mesh.tri.len()];
         let mut stack = Vec::new();
         let mut round: Vec<u64> = Vec::new();
         self.store.reserve(new);
@@ -378,10 +379,8 @@ impl LiveCells {
         }
         self.points = lattice.len();
         // Cocircularity of every edge of a triangle that changed.
-        let mut mark = vec![false; self.mesh.tri.len()];
-        for &t in &touched {
-            mark[t as usize] = true;
-        }
+        let mut mark = touched;
+        mark.resize(self.mesh.tri.len(), false);
         for t in 0..mark.len() {
             if !mark[t] {
                 continue;
@@ -410,7 +409,7 @@ impl LiveCells {
         &mut self,
         i: u32,
         x: ZZeta,
-        touched: &mut Vec<u32>,
+        touched: &mut Vec<bool>,
         stack: &mut Vec<(u32, u8)>,
     ) -> Result<(), Rebuild> {
         let p = self.store.push(x, i);
@@ -528,9 +527,10 @@ impl LiveCells {
         // The triangles made or rewritten (each on the stack with its edge facing away from
         // the new point): no merge flag yet, cocircularity to be tested again.
         self.merge.resize(m.tri.len(), [false; 3]);
+        touched.resize(m.tri.len(), false);
         for &(t, _) in stack.iter() {
             self.merge[t as usize] = [false; 3];
-            touched.push(t);
+            touched[t as usize] = true;
         }
         // Every triangle on the stack has p, and keeps it through the flips below.
         if let Some(&(t, _)) = stack.first() {
@@ -561,7 +561,8 @@ impl LiveCells {
             // New triangles are [a, b, d] and [a, d, c], a the new point: their edges
             // opposite a are the ones to check.
             stack.extend([(t1, 0), (t2, 0)]);
-            touched.extend([t1, t2]);
+            touched[t1 as usize] = true;
+            touched[t2 as usize] = true;
         }
         self.flips += flips;
         Ok(())
