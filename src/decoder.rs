@@ -7,7 +7,7 @@ use crate::coding::raw::RawUnpacker;
 use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
 };
-use crate::reconstruction::{CellSeed, Method, SampleSet};
+use crate::reconstruction::{Method, SampleSet};
 use crate::sites::{Frame, FrameError, Quasicrystal, Site};
 use crate::{Error, Limits, Result};
 use image::DynamicImage;
@@ -411,32 +411,36 @@ impl StreamDecoder {
         Ok(())
     }
 
-    /// Renders from the first `k` available samples only (a fresh set), extending `seed`, the
-    /// cells of the first samples, if given. A one-shot decode's last step: the decoder is
-    /// consumed, so that what the picture no longer needs (the colour decoder's state, the
-    /// sites, the cells' insertion structure) is freed before the picture is allocated.
+    /// Renders from the first `k` available samples only. `seed`, if given, is a set of the
+    /// first samples (blank colours) whose cells are built: it is coloured and completed
+    /// rather than built again. A one-shot decode's last step: the decoder is consumed, so
+    /// that what the picture no longer needs (the colour decoder's state, the sites, the
+    /// cells' insertion structure) is freed before the picture is allocated.
     fn render_prefix(
         mut self,
         k: u64,
         method: Method,
         width: u32,
         height: u32,
-        seed: Option<CellSeed>,
+        seed: Option<SampleSet>,
     ) -> Result<DecodedImage> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
         self.predictive = None;
         self.set = None;
         let c = self.channels();
-        let mut set = self.new_set(&h);
+        let fresh = self.new_set(&h);
         let (sites, col) = self.samples(k);
         let used = sites.len() as u64;
-        set.reserve(sites.len());
-        for (k, s) in sites.iter().enumerate() {
+        let mut set = match seed {
+            Some(set) if set.len() <= sites.len() => set,
+            _ => fresh,
+        };
+        let have = set.len();
+        set.reserve(sites.len() - have);
+        set.recolour(0, &col[..have * c]);
+        for (k, s) in sites.iter().enumerate().skip(have) {
             set.push_site(s, &col[k * c..k * c + c]);
-        }
-        if let Some(seed) = seed {
-            set.seed_cells(seed);
         }
         let icc = self.icc_profile().map(<[u8]>::to_vec);
         // Levels complete within the samples used.
@@ -546,7 +550,7 @@ fn push_whole(
     bytes: &[u8],
     max_samples: u64,
     build_cells: bool,
-) -> Result<Option<CellSeed>> {
+) -> Result<Option<SampleSet>> {
     let head = Header::parse(bytes).map_or(0, |(_, len)| len);
     dec.push(&bytes[..head])?;
     let (Some(h), Some(seq)) = (dec.header().cloned(), dec.seq) else {
@@ -573,13 +577,15 @@ fn push_whole(
     let (pushed, seed) = rayon::join(
         || dec.push(&bytes[head..]),
         move || {
-            set.reserve(sure);
+            // Room for every sample present: the render adds those beyond `sure`.
+            set.reserve(present);
             for s in &sites[..sure] {
                 set.push_site(s, &blank);
             }
-            set.into_seed()
+            set.build_cells();
+            set
         },
     );
     pushed?;
-    Ok(seed)
+    Ok(Some(seed))
 }

@@ -75,14 +75,6 @@ use hull::Boundary;
 use mirror::{mirror_points, Lines};
 use raster::Band;
 
-/// The exact triangulation of a set's first points and their cells, to seed another set
-/// ([`SampleSet::into_seed`], [`SampleSet::seed_cells`]).
-pub(crate) struct CellSeed {
-    points: usize,
-    live: LiveCells,
-    cells: Option<Cells>,
-}
-
 /// How a picture is rebuilt from its samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Method {
@@ -486,32 +478,10 @@ impl SampleSet {
         self.rebuilds
     }
 
-    /// The exact triangulation of this set's points and their cells: a head start for
-    /// another set whose points begin with these (see [`SampleSet::seed_cells`]).
-    pub(crate) fn into_seed(mut self) -> Option<CellSeed> {
+    /// Builds the cells of the points so far (and keeps the triangulation behind them, to
+    /// insert more points): e.g. on another thread, before the colours are known.
+    pub(crate) fn build_cells(&mut self) {
         self.sync_cells();
-        let (points, cells) = self.cells?;
-        let live = self.live?;
-        Some(CellSeed {
-            points,
-            live,
-            cells,
-        })
-    }
-
-    /// Takes `seed` (from [`SampleSet::into_seed`] of a set whose points are the first of
-    /// this one's, in the same frame) as the triangulation to extend, if none is built yet.
-    /// The cells do not depend on the insertion order, so neither does the picture.
-    pub(crate) fn seed_cells(&mut self, seed: CellSeed) {
-        let n = self.points.positions.len();
-        if self.live.is_some() || self.cells.is_some() || seed.points > n {
-            return;
-        }
-        self.live = Some(seed.live);
-        self.rebuilds += 1;
-        if seed.points == n {
-            self.cells = Some((n, seed.cells));
-        }
     }
 
     /// Prepares a set that will get no more points for `method`'s renders, freeing what only
