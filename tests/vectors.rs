@@ -6,7 +6,9 @@
 //!
 //! For each vector `NAME`: `NAME.qcs`, `NAME.png` (the whole file decoded at the image's size,
 //! Gouraud) and `NAME.half.png` (the first ⌊len/2⌋ bytes decoded the same way). A decoder matches
-//! when every channel of every pixel is within ±1 of the PNG.
+//! when every channel of every pixel is within ±1 of the PNG. `NAME.samples.csv` and
+//! `NAME.half.samples.csv` list the samples each of the two reads, exactly (site, position,
+//! colour): what `spec/reference/qcs_ref.py`, a decoder written from the spec alone, checks.
 
 use image::{DynamicImage, GenericImageView};
 use qcs::container::{Coding, Header};
@@ -159,6 +161,27 @@ fn decode_png(bytes: &[u8]) -> DynamicImage {
         .image
 }
 
+/// Every sample a decoder reads from `bytes`, as CSV: index, lattice point, position (6
+/// decimals), colour channels in the file's layout.
+fn samples_csv(bytes: &[u8]) -> String {
+    let mut dec = qcs::StreamDecoder::new(qcs::Limits::default());
+    dec.push(bytes).expect("vector decodes");
+    let c = dec.header().expect("header").layout.channels() as usize;
+    let (sites, colours) = dec.samples(u64::MAX);
+    let mut out = String::from("index,n0,n1,n2,n3,x,y,colour\n");
+    for (i, (s, col)) in sites.iter().zip(colours.chunks_exact(c)).enumerate() {
+        let [n0, n1, n2, n3] = s.lattice.0;
+        let col: Vec<String> = col.iter().map(u8::to_string).collect();
+        out += &format!(
+            "{i},{n0},{n1},{n2},{n3},{:.6},{:.6},{}\n",
+            s.pos[0],
+            s.pos[1],
+            col.join(" ")
+        );
+    }
+    out
+}
+
 fn write_png(path: &Path, img: &DynamicImage) {
     img.save_with_format(path, image::ImageFormat::Png)
         .unwrap_or_else(|e| panic!("writing {}: {e}", path.display()));
@@ -186,9 +209,16 @@ fn regenerate() {
             &dir().join(format!("{}.half.png", v.name)),
             &decode_png(&bytes[..bytes.len() / 2]),
         );
-        let bits = match h.coding {
-            Coding::Raw { bits } => bits,
-            Coding::Predictive { .. } => 0,
+        for (suffix, prefix) in [
+            ("samples.csv", bytes.len()),
+            ("half.samples.csv", bytes.len() / 2),
+        ] {
+            let path = dir().join(format!("{}.{suffix}", v.name));
+            std::fs::write(path, samples_csv(&bytes[..prefix])).expect("write samples");
+        }
+        let coding = match h.coding {
+            Coding::Raw { bits } => format!("raw, B = {bits}"),
+            Coding::Predictive { step } => format!("predictive, s = {step}"),
         };
         table.push_str(&format!(
             "| `{}` | {}×{} | {:?} | {} | {} | {} | {} | {} | {} |\n",
@@ -196,7 +226,7 @@ fn regenerate() {
             h.width,
             h.height,
             h.layout,
-            bits,
+            coding,
             h.total_samples,
             h.first_level,
             h.level_count(),
@@ -213,8 +243,13 @@ fn regenerate() {
          - `NAME.qcs`: the file.\n\
          - `NAME.png`: the whole file decoded at the image's own size with the Gouraud method.\n\
          - `NAME.half.png`: the first ⌊len / 2⌋ bytes decoded the same way (a cut download: the\n  \
-           verified levels plus the complete, unverified samples of the partial level chunk).\n\n\
-         A decoder conforms when every channel of every pixel is within ±{TOLERANCE} of the PNG.\n\
+           verified levels plus the complete, unverified samples of the partial level chunk).\n\
+         - `NAME.samples.csv`, `NAME.half.samples.csv`: the samples a decoder reads from the whole\n  \
+           file and from its first half, exactly: `index,n0,n1,n2,n3,x,y,colour` (the site's\n  \
+           lattice point, its pixel position to 6 decimals, its channels in the file's layout).\n\n\
+         A decoder conforms when it reads exactly those samples (positions within 10⁻⁵ px) and\n\
+         every channel of every pixel is within ±{TOLERANCE} of the PNG. `spec/reference/` holds a\n\
+         decoder of the samples written from the spec alone, which checks itself against them.\n\
          The PNGs follow the reference reconstruction, which may still change: regenerate every\n\
          file with one command,\n\n\
          ```\nQCS_REGENERATE=1 cargo test --release --test vectors\n```\n\n\
@@ -222,7 +257,7 @@ fn regenerate() {
          writes the same bytes). The sample colours are the encoder's choice:\n\
          `SampleColour::Progressive`, but the encoder's default (`SampleColour::Fitted`) in\n\
          `rgb-predictive-defaults`. The files, not the encoder, are the reference.\n\n\
-         | name | size | layout | bits | N | L0 | levels | header bytes | file bytes |\n\
+         | name | size | layout | coding | N | L0 | levels | header bytes | file bytes |\n\
          |---|---|---|---|---|---|---|---|---|\n{table}\n\
          The `sites-*.csv` files are the site-sequence vectors of spec/sites.md (not part of this\n\
          set).\n"
@@ -235,7 +270,7 @@ fn regenerating() -> bool {
 }
 
 #[test]
-fn vectors_decode_to_their_pngs() {
+fn vectors_decode_to_their_samples_and_pngs() {
     if regenerating() {
         regenerate();
     }
@@ -243,15 +278,23 @@ fn vectors_decode_to_their_pngs() {
     for v in vectors() {
         let bytes = std::fs::read(dir().join(format!("{}.qcs", v.name)))
             .unwrap_or_else(|e| panic!("{}.qcs: {e} (QCS_REGENERATE=1 writes it)", v.name));
-        for (suffix, prefix) in [("png", bytes.len()), ("half.png", bytes.len() / 2)] {
-            let path = dir().join(format!("{}.{suffix}", v.name));
+        for (half, prefix) in [("", bytes.len()), ("half.", bytes.len() / 2)] {
+            let path = dir().join(format!("{}.{half}png", v.name));
             let want = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             let got = decode_png(&bytes[..prefix]);
             let d = max_diff(&got, &want);
-            report.push(format!("{}.{suffix}: max diff {d}", v.name));
+            report.push(format!("{}.{half}png: max diff {d}", v.name));
             assert!(
                 d <= TOLERANCE,
                 "{}: max channel difference {d} > {TOLERANCE}",
+                path.display()
+            );
+            let path = dir().join(format!("{}.{half}samples.csv", v.name));
+            let want = std::fs::read_to_string(&path)
+                .unwrap_or_else(|e| panic!("{}: {e} (QCS_REGENERATE=1 writes it)", path.display()));
+            assert!(
+                samples_csv(&bytes[..prefix]) == want,
+                "{}: the decoder reads other samples now",
                 path.display()
             );
         }
@@ -308,4 +351,30 @@ fn vectors_cover_what_the_set_promises() {
         assert!(layouts.contains(&l), "{l:?} missing");
     }
     assert!(bits5 && bits8 && frame && text && defaults == [true; 2]);
+}
+
+/// The decoder written from the spec alone (`spec/reference/qcs_ref.py`) reads exactly the
+/// samples listed for every vector, whole and cut, and the site vectors' sites. Needs
+/// `python3`; where it is missing the test says so and passes.
+#[test]
+fn a_decoder_written_from_the_spec_alone_agrees() {
+    let has_python = std::process::Command::new("python3")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_python {
+        eprintln!("skipped: python3 not found (spec/reference/check.sh needs it)");
+        return;
+    }
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("spec/reference/check.sh");
+    let out = std::process::Command::new("sh")
+        .arg(&script)
+        .output()
+        .expect("sh runs");
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && report.contains("PASS") && !report.contains("FAIL"),
+        "{report}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

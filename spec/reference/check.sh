@@ -1,0 +1,55 @@
+#!/bin/sh
+# Checks the spec-only decoder (qcs_ref.py) against the conformance vectors: for every
+# spec/vectors/NAME.qcs, whole and cut to its first floor(len/2) bytes, the samples it reads
+# must equal NAME[.half].samples.csv (exactly; positions within 1e-5 px), and its first sites
+# of three image sizes must equal spec/vectors/sites-*.csv. Prints PASS/FAIL per case and
+# exits 1 on any failure. Needs python3 only.
+set -u
+D=$(cd "$(dirname "$0")" && pwd)
+V="$D/../vectors"
+OUT=$(mktemp -d)
+trap 'rm -rf "$OUT"' EXIT
+fail=0
+for f in "$V"/*.qcs; do
+  name=$(basename "$f" .qcs)
+  len=$(wc -c < "$f")
+  for case in whole half; do
+    if [ "$case" = whole ]; then tag=$name; cut=$len; else tag=$name.half; cut=$((len / 2)); fi
+    python3 "$D/qcs_ref.py" "$f" "$cut" > "$OUT/$tag.csv" 2> "$OUT/$tag.err"
+    python3 - "$V/$tag.samples.csv" "$OUT/$tag.csv" "$tag" <<'PY' || fail=1
+import csv, sys
+want, got, tag = sys.argv[1:4]
+a, b = list(csv.reader(open(want))), list(csv.reader(open(got)))
+msg = None
+if len(a) != len(b) or a[0] != b[0]:
+    msg = "expected %d samples, got %d" % (len(a) - 1, len(b) - 1)
+for ra, rb in zip(a[1:], b[1:]):
+    if msg:
+        break
+    if ra[:5] != rb[:5] or ra[7] != rb[7] or max(abs(float(ra[k]) - float(rb[k])) for k in (5, 6)) > 1e-5:
+        msg = "sample %s: expected %s, got %s" % (ra[0], ",".join(ra), ",".join(rb))
+print("PASS %s" % tag if msg is None else "FAIL %s: %s" % (tag, msg))
+sys.exit(msg is not None)
+PY
+  done
+done
+python3 - "$D" "$V" <<'PY' || fail=1
+import csv, sys
+sys.path.insert(0, sys.argv[1])
+import qcs_ref as q
+bad_any = False
+for w, h in [(64, 64), (480, 320), (1000, 17)]:
+    rows = list(csv.DictReader(open("%s/sites-%dx%d.csv" % (sys.argv[2], w, h))))
+    L, cx, cy = 1 << 16, -w * (1 << 15), -((h << 16) // 3)
+    got = q.sites(len(rows), w, h, L, cx, cy)
+    bad = 0
+    for s, r in zip(got, rows):
+        n = tuple(int(r[k]) for k in ("n0", "n1", "n2", "n3"))
+        x, y = q.pixel_position(s["n"], L, cx, cy)
+        same = s["n"] == n and q.star_norm(n) == (int(r["p"]), int(r["q"]))
+        bad += not (same and abs(x - float(r["x"])) <= 1e-6 and abs(y - float(r["y"])) <= 1e-6)
+    print("%s sites-%dx%d (%d sites)" % ("PASS" if bad == 0 else "FAIL", w, h, len(rows)))
+    bad_any |= bad > 0
+sys.exit(bad_any)
+PY
+exit $fail
