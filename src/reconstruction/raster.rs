@@ -493,7 +493,7 @@ pub(crate) fn paint_groups<E, Y, F>(
     finish: F,
 ) -> (Vec<u8>, Vec<bool>)
 where
-    Y: Fn(usize) -> (f64, f64),
+    Y: Fn(usize) -> (f64, f64) + Sync,
     E: Fn(usize, &mut Band<'_>) + Sync,
     F: Fn(&mut Band<'_>) + Sync,
 {
@@ -515,7 +515,14 @@ where
         let (r0, r1) = (row(y0 - 0.5 - m), row(y1 - 0.5 + m).min(h as i64) - 1);
         (r0 <= r1).then_some((r0.max(0) as usize >> shift, r1.max(0) as usize >> shift))
     };
-    let spans: Vec<Option<(usize, usize)>> = (0..groups).map(span).collect();
+    // The groups' vertices are read in sample order, scattered over the picture: with many
+    // groups that is the render's largest serial step, so it is shared out too.
+    let spans: Vec<Option<(usize, usize)>> = if parallel {
+        use rayon::prelude::*;
+        (0..groups).into_par_iter().map(span).collect()
+    } else {
+        (0..groups).map(span).collect()
+    };
     let mut start = vec![0u32; nbands + 1];
     for (b0, b1) in spans.iter().flatten() {
         for b in *b0..=*b1 {
