@@ -14,23 +14,18 @@
 //!
 //! Run: `cargo bench --bench cells -- --warm-up-time 1 --measurement-time 3`
 
+mod common;
+use common::{photo, SIDE};
+
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use image::{imageops::FilterType, RgbImage};
 use qcs::lattice::ZZeta;
 use qcs::reconstruction::{Cells, Method, RenderOptions, SampleSet, Triangulation, Vertex};
 use qcs::sites::Quasicrystal;
 use spade::{Point2, Triangulation as _};
 
-const SIDE: u32 = 1024;
 const COUNTS: [usize; 2] = [16_384, 65_536];
-
-fn photo() -> RgbImage {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
-    let img = image::open(path).expect("assets/rocket.png").to_rgb8();
-    image::imageops::resize(&img, SIDE, SIDE, FilterType::Triangle)
-}
 
 fn bench(c: &mut Criterion) {
     let img = photo();

@@ -5,21 +5,20 @@
 //!
 //! Run: `cargo bench --bench coding -- --warm-up-time 1 --measurement-time 3`
 
+mod common;
+use common::{photo, SIDE};
+
 use std::hint::black_box;
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
-use image::imageops::FilterType;
 use qcs::coding::predictive::{fixed_position, Params, PredictiveDecoder, PredictiveEncoder};
 use qcs::container::{Header, Layout};
 use qcs::sites::Quasicrystal;
 
-const SIDE: u32 = 1024;
 const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
 
 fn bench(c: &mut Criterion) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
-    let img = image::open(path).expect("assets/rocket.png");
-    let img = img.resize_exact(SIDE, SIDE, FilterType::Triangle).to_rgb8();
+    let img = photo();
     let q = Quasicrystal::new(SIDE, SIDE).expect("frame");
     let params = Params::from_quality(75);
     let mut g = c.benchmark_group("predictive_1mpx");

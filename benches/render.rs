@@ -22,25 +22,21 @@
 //! `QCS_ONCE=gouraud:65536 valgrind --tool=callgrind --toggle-collect='*render_with*' target/release/deps/render-*`
 //! (workloads: `gouraud:N`, `cubic:N`, `shepard:N`, `natural:N`, `raster:N`).
 
+mod common;
+use common::{photo, pool, SIDE};
+
 use std::hint::black_box;
 use std::io::Cursor;
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use image::codecs::jpeg::JpegEncoder;
-use image::{imageops::FilterType, ImageEncoder, RgbImage};
+use image::{ImageEncoder, RgbImage};
 use qcs::reconstruction::{
     rasterise, triangles, Grid, Method, RenderOptions, SampleSet, Triangulation, Vertex,
 };
 use spade::{Point2, Triangulation as _};
 
-const SIDE: u32 = 1024;
 const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
-
-fn photo() -> RgbImage {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
-    let img = image::open(path).expect("assets/rocket.png").to_rgb8();
-    image::imageops::resize(&img, SIDE, SIDE, FilterType::Triangle)
-}
 
 /// A jittered `k × k` grid over the picture (k² = n), deterministic.
 fn jittered(n: usize) -> Vec<[f64; 2]> {
@@ -162,14 +158,8 @@ fn bench(c: &mut Criterion) {
 
     // The whole one-shot decode of a real .qcs file (default coding, N samples) on one core,
     // beside `image` decoding a JPEG of the same photograph and the same file size.
-    let one_core = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("a one-thread pool");
-    let two_cores = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .expect("a two-thread pool");
+    let one_core = pool(1);
+    let two_cores = pool(2);
     let mut dec = c.benchmark_group("decode_1mpx");
     dec.sample_size(10);
     dec.throughput(Throughput::Elements(pixels));

@@ -5,26 +5,22 @@
 //!
 //! Run: `cargo bench --bench sampling -- --warm-up-time 1 --measurement-time 5`
 
+mod common;
+use common::{photo, pool, SIDE};
+
 use std::hint::black_box;
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
-use image::imageops::FilterType;
 use qcs::sampling::{SampleColour, SourceImage};
 use qcs::sites::Quasicrystal;
 
-const SIDE: u32 = 1024;
 const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
 
 fn bench(c: &mut Criterion) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rocket.png");
-    let img = image::open(path).expect("assets/rocket.png");
-    let img = img.resize_exact(SIDE, SIDE, FilterType::Triangle).to_rgb8();
+    let img = photo();
     let src = SourceImage::new(img.as_raw(), SIDE, SIDE, 3).expect("source");
     let q = Quasicrystal::new(SIDE, SIDE).expect("frame");
-    let one_core = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("a one-thread pool");
+    let one_core = pool(1);
     let mut g = c.benchmark_group("sample_colours_1mpx");
     g.sample_size(10);
     for n in COUNTS {
