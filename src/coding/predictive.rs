@@ -345,9 +345,10 @@ impl Predictor {
 
     /// The up to `NEIGHBOURS` nearest earlier samples as (squared distance, index), sorted.
     ///
-    /// Cells are visited in square rings around `p`'s cell; a cell is skipped when even its
-    /// nearest point is farther than the current `NEIGHBOURS`-th, and the search ends when no
-    /// point outside the rings visited can be as near.
+    /// Cells are visited in square rings around `p`'s cell (the 3 × 3 cells of the first two
+    /// at once); a cell of a later ring is skipped when even its nearest point is farther than
+    /// the current `NEIGHBOURS`-th, and the search ends when no point outside the rings
+    /// visited can be as near.
     fn nearest(&self, p: [i64; 2], coded: u32) -> [(i64, u32); NEIGHBOURS] {
         // The nearest so far, sorted by (squared distance, index); (i64::MAX, u32::MAX) fills.
         let mut top = [(i64::MAX, u32::MAX); NEIGHBOURS];
@@ -361,6 +362,19 @@ impl Predictor {
         // Distance from p to the cells from `lo` to `hi` along one axis (0 inside): a lower
         // bound for any point in them, also those clamped into a border cell.
         let gap = |v: i64, lo: i64, hi: i64| (lo * cell - v).max(v - (hi + 1) * cell).max(0);
+        let offer = |q: [i64; 2], i: u32, top: &mut [(i64, u32); NEIGHBOURS], found: &mut usize| {
+            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+            let e = (dx * dx + dy * dy, i);
+            if e < top[NEIGHBOURS - 1] {
+                let mut k = NEIGHBOURS - 1;
+                while k > 0 && e < top[k - 1] {
+                    top[k] = top[k - 1];
+                    k -= 1;
+                }
+                top[k] = e;
+                *found += 1;
+            }
+        };
         let visit = |x: i64, y: i64, top: &mut [(i64, u32); NEIGHBOURS], found: &mut usize| {
             let (gx, gy) = (gap(p[0], x, x), gap(p[1], y, y));
             if gx * gx + gy * gy > top[NEIGHBOURS - 1].0 {
@@ -372,31 +386,38 @@ impl Predictor {
                 if i >= coded {
                     break;
                 }
-                let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-                let e = (dx * dx + dy * dy, i);
-                if e < top[NEIGHBOURS - 1] {
-                    let mut k = NEIGHBOURS - 1;
-                    while k > 0 && e < top[k - 1] {
-                        top[k] = top[k - 1];
-                        k -= 1;
-                    }
-                    top[k] = e;
-                    *found += 1;
-                }
+                offer(q, i, top, found);
             }
         };
-        for r in 0.. {
-            let (x0, x1) = ((cx - r).max(0), (cx + r).min(self.gw - 1));
-            let (y0, y1) = ((cy - r).max(0), (cy + r).min(self.gh - 1));
-            for y in y0..=y1 {
-                if y == cy - r || y == cy + r {
-                    for x in x0..=x1 {
-                        visit(x, y, &mut top, &mut found);
-                    }
-                } else {
-                    for x in [cx - r, cx + r] {
-                        if (0..self.gw).contains(&x) {
+        // The first two rings, 3 × 3 cells, are visited whole: each of their rows of cells is
+        // one run of `entries`, read straight through (skipping samples not coded yet).
+        let (x0, x1) = ((cx - 1).max(0), (cx + 1).min(self.gw - 1));
+        for y in (cy - 1).max(0)..=(cy + 1).min(self.gh - 1) {
+            let row = y * self.gw;
+            let (a, b) = (
+                self.start[(row + x0) as usize],
+                self.start[(row + x1 + 1) as usize],
+            );
+            for &(q, i) in &self.entries[a as usize..b as usize] {
+                if i < coded {
+                    offer(q, i, &mut top, &mut found);
+                }
+            }
+        }
+        for r in 1.. {
+            if r > 1 {
+                let (x0, x1) = ((cx - r).max(0), (cx + r).min(self.gw - 1));
+                let (y0, y1) = ((cy - r).max(0), (cy + r).min(self.gh - 1));
+                for y in y0..=y1 {
+                    if y == cy - r || y == cy + r {
+                        for x in x0..=x1 {
                             visit(x, y, &mut top, &mut found);
+                        }
+                    } else {
+                        for x in [cx - r, cx + r] {
+                            if (0..self.gw).contains(&x) {
+                                visit(x, y, &mut top, &mut found);
+                            }
                         }
                     }
                 }
