@@ -425,14 +425,18 @@ impl<const C: usize> Cands<C> {
 const BLOCK: f64 = 1.6;
 
 /// Output pixels per block side: blocks about `BLOCK` sample spacings wide, in whole `unit`s
-/// (up to 32 pixels).
+/// (up to 32 pixels); in single pixels when even one `unit` would be more than twice that,
+/// as in a thumbnail of a large image, where a block of `unit` pixels would span many
+/// spacings and gather (and sort) every sample in it for each block.
 fn block_size(grid: &Grid, step: f64, unit: usize) -> usize {
-    let b = (BLOCK * grid.spacing() / step / unit as f64).round();
-    if b.is_finite() {
-        b.clamp(1.0, (32 / unit) as f64) as usize * unit
-    } else {
-        unit
+    let side = BLOCK * grid.spacing() / step;
+    if !side.is_finite() {
+        return unit;
     }
+    if side < 0.5 * unit as f64 {
+        return side.round().max(1.0) as usize;
+    }
+    (side / unit as f64).round().clamp(1.0, (32 / unit) as f64) as usize * unit
 }
 
 /// Renders by Shepard interpolation over `grid` into `frame`'s output.
@@ -848,7 +852,7 @@ mod tests {
     /// Whole renders equal the brute-force ones byte for byte, single-threaded and in
     /// parallel: random, quasicrystal and lattice sites (exact ties), duplicates, collinear and
     /// clustered samples, 1–5 samples, samples outside the picture, odd output sizes, up- and
-    /// downscaled.
+    /// downscaled (blocks of 1, 2 and whole fours of pixels).
     #[test]
     fn renders_equal_brute_force() {
         let mut r = rng(11);
@@ -892,6 +896,7 @@ mod tests {
                     (1, 1),
                     (7, 5),
                     (w0 / 3 + 1, h0 / 4 + 1),
+                    (2 * w0 / 5 + 1, 2 * h0 / 5 + 1),
                     (2 * w0 + 1, 2 * h0),
                     (5 * w0, 3 * h0 + 1),
                 ] {
