@@ -117,6 +117,9 @@ pub(crate) fn mirror_points(
     let near = |d: f64| d >= 0.0 && d * d * (k as f64 + 1.0) < limit;
     let sx = [near(pos[0]), near(w - pos[0])];
     let sy = [near(pos[1]), near(h - pos[1])];
+    if !(sx[0] || sx[1] || sy[0] || sy[1]) {
+        return; // Far from every edge: most samples of a large set.
+    }
     let float_x = [-pos[0], 2.0 * w - pos[0]];
     let float_y = [-pos[1], 2.0 * h - pos[1]];
     // Across a vertical edge, a horizontal one, and both (near a corner).
