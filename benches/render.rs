@@ -16,11 +16,13 @@
 //! and triangle set-up, binning, rasterising, the outside-the-hull rule (nothing to do here:
 //! the hull of the samples and mirror points holds the picture, so no mask is kept); `cubic`
 //! the same with the cubic patches (gradients estimated, then a patch per triangle).
+//! `render_thumbnail_single` renders a 128 × 128 thumbnail by Shepard from the same sets.
 //!
 //! Instruction counts (stable on a loaded machine): `QCS_ONCE=<workload>` runs one workload a
 //! fixed number of times instead of criterion, e.g.
 //! `QCS_ONCE=gouraud:65536 valgrind --tool=callgrind --toggle-collect='*render_with*' target/release/deps/render-*`
-//! (workloads: `gouraud:N`, `cubic:N`, `shepard:N`, `natural:N`, `raster:N`).
+//! (workloads: `gouraud:N`, `cubic:N`, `shepard:N`, `natural:N`, `raster:N`; `shepard:N:128`
+//! renders at 128 × 128).
 
 mod common;
 use common::{photo, pool, SIDE};
@@ -37,6 +39,8 @@ use qcs::reconstruction::{
 use spade::{Point2, Triangulation as _};
 
 const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
+/// Side of the thumbnail renders.
+const THUMB: u32 = 128;
 
 /// A jittered `k × k` grid over the picture (k² = n), deterministic.
 fn jittered(n: usize) -> Vec<[f64; 2]> {
@@ -156,6 +160,19 @@ fn bench(c: &mut Criterion) {
     }
     ras.finish();
 
+    // A 128 × 128 thumbnail (many samples per output pixel).
+    let mut thumb = c.benchmark_group("render_thumbnail_single");
+    thumb.sample_size(10);
+    thumb.throughput(Throughput::Elements(THUMB as u64 * THUMB as u64));
+    for &n in &COUNTS {
+        let mut set = sample_set(&img, &jittered(n));
+        let _ = set.render_with(Method::Shepard, 8, 8, single); // builds the grid
+        thumb.bench_function(BenchmarkId::new("shepard", n), |b| {
+            b.iter(|| black_box(set.render_with(Method::Shepard, THUMB, THUMB, single)))
+        });
+    }
+    thumb.finish();
+
     // The whole one-shot decode of a real .qcs file (default coding, N samples) on one core,
     // beside `image` decoding a JPEG of the same photograph and the same file size.
     let one_core = pool(1);
@@ -196,10 +213,13 @@ fn bench(c: &mut Criterion) {
     dec.finish();
 }
 
-/// `QCS_ONCE=method:count`: render that workload 5 times (for instruction counting).
+/// `QCS_ONCE=method:count[:side]`: render that workload 5 times (for instruction counting),
+/// at `side × side` pixels (default 1024).
 fn once(spec: &str) {
-    let (name, n) = spec.split_once(':').expect("QCS_ONCE=method:count");
-    let n: usize = n.parse().expect("count");
+    let mut parts = spec.split(':');
+    let name = parts.next().expect("QCS_ONCE=method:count[:side]");
+    let n: usize = parts.next().and_then(|n| n.parse().ok()).expect("count");
+    let side: u32 = parts.next().map_or(SIDE, |s| s.parse().expect("side"));
     let img = photo();
     let sites = jittered(n);
     let mut set = sample_set(&img, &sites);
@@ -224,7 +244,7 @@ fn once(spec: &str) {
     };
     let _ = set.render_with(method, 8, 8, single); // builds the grid outside the count
     for _ in 0..5 {
-        black_box(set.render_with(method, SIDE, SIDE, single));
+        black_box(set.render_with(method, side, side, single));
     }
 }
 

@@ -425,16 +425,20 @@ impl<const C: usize> Cands<C> {
 const BLOCK: f64 = 1.6;
 
 /// Output pixels per block side: blocks about `BLOCK` sample spacings wide, in whole `unit`s
-/// (up to 32 pixels); in single pixels when even one `unit` would be more than twice that,
-/// as in a thumbnail of a large image, where a block of `unit` pixels would span many
-/// spacings and gather (and sort) every sample in it for each block.
+/// (up to 32 pixels); single pixels when one `unit` would be more than 4 times that, as in a
+/// thumbnail of a large image, where a block of `unit` pixels would span many spacings and
+/// gather (and sort) every sample in it for each block. (callgrind, 5 Shepard thumbnails of
+/// 128² from a 1024² source, `QCS_ONCE=shepard:N:128` in `benches/render.rs`: from 262k /
+/// 65k sites, where a unit spans 16 / 8 spacings, blocks of 4 took 1 624 / 421 M
+/// instructions and single pixels take 290 / 259 M; from 16k, 4 spacings, single pixels
+/// would take 228 M against 126 M.)
 fn block_size(grid: &Grid, step: f64, unit: usize) -> usize {
     let side = BLOCK * grid.spacing() / step;
     if !side.is_finite() {
         return unit;
     }
-    if side < 0.5 * unit as f64 {
-        return side.round().max(1.0) as usize;
+    if side * 4.0 < unit as f64 {
+        return 1;
     }
     (side / unit as f64).round().clamp(1.0, (32 / unit) as f64) as usize * unit
 }
@@ -852,7 +856,7 @@ mod tests {
     /// Whole renders equal the brute-force ones byte for byte, single-threaded and in
     /// parallel: random, quasicrystal and lattice sites (exact ties), duplicates, collinear and
     /// clustered samples, 1–5 samples, samples outside the picture, odd output sizes, up- and
-    /// downscaled (blocks of 1, 2 and whole fours of pixels).
+    /// downscaled (blocks of single pixels and of whole fours).
     #[test]
     fn renders_equal_brute_force() {
         let mut r = rng(11);
