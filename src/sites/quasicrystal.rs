@@ -197,7 +197,7 @@ impl Quasicrystal {
     }
 
     /// The lattice points in the image with `|x*| ≤ r` (about; a superset near `r`), unordered.
-    fn enumerate(&self, r: f64, out: &mut Vec<(u64, [i32; 4])>) {
+    fn enumerate(&self, r: f64, out: &mut Vec<(u32, [i32; 4])>) {
         out.clear();
         let l = self.frame.root_px();
         let o = [
@@ -242,9 +242,9 @@ impl Quasicrystal {
                 let shift = (128 - kmax.leading_zeros()).saturating_sub(32);
                 for c in cand.iter_mut() {
                     let k = order_key(point(c.1).star().norm2()).max(0) as u128;
-                    c.0 = (k >> shift).min(u32::MAX as u128) as u64;
+                    c.0 = (k >> shift).min(u32::MAX as u128) as u32;
                 }
-                radsort::sort_by_key(&mut cand, |c| c.0 as u32);
+                radsort::sort_by_key(&mut cand, |c| c.0);
                 let mut start = 0;
                 while start < count {
                     let mut end = start + 1;
