@@ -94,6 +94,11 @@ pub struct StreamDecoder {
     set: Option<SampleSet>,
     stopped: Option<FormatError>,
     metadata: Vec<Metadata>,
+    /// Levels starting at or after this sample are parsed and verified but not decoded: a
+    /// one-shot decode capped at fewer samples does not pay for the rest.
+    decode_limit: u64,
+    /// Whether the level being parsed is past `decode_limit`.
+    skipping: bool,
     /// Set when `push` returned an error: the events after it were not applied, so the state
     /// no longer follows the parser and every further `push` must fail.
     failed: bool,
@@ -123,6 +128,8 @@ impl StreamDecoder {
             set: None,
             stopped: None,
             metadata: Vec::new(),
+            decode_limit: u64::MAX,
+            skipping: false,
             failed: false,
         }
     }
@@ -212,6 +219,11 @@ impl StreamDecoder {
                 ..
             } => {
                 let h = self.header.as_ref().expect("header precedes levels");
+                self.skipping = samples.start >= self.decode_limit;
+                if self.skipping {
+                    self.unpacker = None;
+                    return Ok(());
+                }
                 self.unpacker = match h.coding {
                     Coding::Raw { bits } => Some(RawUnpacker::new(
                         h.layout.channels(),
@@ -235,6 +247,7 @@ impl StreamDecoder {
                     }
                 };
             }
+            Event::LevelData { .. } if self.skipping => {}
             Event::LevelData { bytes, .. } => {
                 if let Some(u) = &mut self.unpacker {
                     u.push(bytes, &mut self.colours);
@@ -486,7 +499,9 @@ pub struct DecodeOptions {
     pub method: Method,
     /// Output size; `None` for the image's own size.
     pub size: Option<(u32, u32)>,
-    /// Use at most this many samples.
+    /// Use at most this many samples. The levels after the one that holds the last of them
+    /// are read only to check them, not decoded, so the decode costs what those samples cost
+    /// (see [`DecodeOptions::thumbnail`]).
     pub max_samples: Option<u64>,
     /// Use only the first this many bytes, as a cut download would.
     pub max_bytes: Option<usize>,
@@ -505,6 +520,40 @@ impl Default for DecodeOptions {
             max_bytes: None,
             limits: Limits::default(),
             recover: false,
+        }
+    }
+}
+
+/// Samples per output pixel that [`DecodeOptions::thumbnail`] renders from.
+pub const THUMBNAIL_SAMPLES_PER_PIXEL: u64 = 4;
+
+impl DecodeOptions {
+    /// Options for a `width × height` picture much smaller than the image: rendered from the
+    /// first [`THUMBNAIL_SAMPLES_PER_PIXEL`] samples per output pixel only (`max_samples`).
+    ///
+    /// Any prefix of a file is spread evenly over the image, so the first samples are a
+    /// coarser sampling of the whole picture, and the decode reads (and verifies) the rest
+    /// without decoding it. Such a thumbnail is both much faster and closer to the image
+    /// than one rendered from every sample: those are far denser than the output pixels,
+    /// and a pixel centre picks up the detail at that one point, which aliases. With fewer
+    /// samples than this cap, or an output at least half the image's size at the default
+    /// density, it changes nothing. (Measured in the README: mean PSNR against an
+    /// area-averaged downscale of 8 photographs at 1/8 of their size, 30.9 dB against 28.1 dB
+    /// by Gouraud, at 1/16 29.1 against 23.9 dB; a 120 × 90 picture of a 12-megapixel file
+    /// in 0.06 s against 5.7 s.)
+    ///
+    /// ```
+    /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(64, 64, |x, y| image::Luma([(x * y) as u8])));
+    /// let bytes = qcs::encode(&img, &Default::default())?;
+    /// let thumb = qcs::decode(&bytes, &qcs::DecodeOptions::thumbnail(8, 8))?;
+    /// assert_eq!((thumb.image.width(), thumb.samples_used), (8, 4 * 8 * 8));
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn thumbnail(width: u32, height: u32) -> Self {
+        DecodeOptions {
+            size: Some((width, height)),
+            max_samples: Some(THUMBNAIL_SAMPLES_PER_PIXEL * width as u64 * height as u64),
+            ..Default::default()
         }
     }
 }
@@ -532,6 +581,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
         ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover),
     );
     let max_samples = opts.max_samples.unwrap_or(u64::MAX);
+    dec.decode_limit = max_samples;
     let build_cells = opts.method == Method::Gouraud && rayon::current_num_threads() > 1;
     let seed = push_whole(&mut dec, bytes, max_samples, build_cells)?;
     let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
@@ -541,7 +591,8 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
 }
 
 /// Pushes `bytes` (a whole buffer) into the fresh decoder `dec`, the sites of the levels
-/// present computed once up front. If `build_cells`, meanwhile, on another thread of the pool,
+/// present (up to the one holding sample `max_samples`, where `dec` stops decoding) computed
+/// once up front. If `build_cells`, meanwhile, on another thread of the pool,
 /// the cells of the samples that are surely there (those of the verified levels, at most
 /// `max_samples`) are built: the cells depend only on the header, so they need not wait for
 /// the colours. The header goes first, so that its limits hold before any work.
@@ -563,7 +614,13 @@ fn push_whole(
         .map(|l| l.samples.end)
         .max()
         .unwrap_or(0)
-        .min(h.total_samples) as usize;
+        .min(h.total_samples);
+    // The levels beyond the one that holds sample `max_samples` are only verified.
+    let needed = (found.levels.iter())
+        .map(|l| l.samples.end)
+        .find(|&end| end >= max_samples)
+        .unwrap_or(u64::MAX);
+    let present = present.min(needed) as usize;
     // The levels' colours need their sites' positions, the cells the sites.
     dec.sites = Arc::new(seq.first(present));
     if !build_cells {

@@ -123,6 +123,40 @@ fn rocket_qcs(name: &str) -> PathBuf {
     file
 }
 
+/// An output much smaller than the image draws on the first 4 samples per output pixel
+/// (`DecodeOptions::thumbnail`), and says so; `--all-samples` draws on every one.
+#[test]
+fn small_outputs_use_the_samples_they_need() {
+    let file = rocket_qcs("thumb.qcs");
+    let bytes = std::fs::read(&file).expect("read");
+    let total = qcs::container::inspect(&bytes)
+        .header
+        .expect("header")
+        .total_samples;
+    for (all, used) in [(false, 4 * 60 * 40), (true, total)] {
+        let png = scratch(&format!("thumb-{all}.png"));
+        let mut cmd = qcs();
+        cmd.arg("decode")
+            .arg(&file)
+            .arg(&png)
+            .args(["--size", "60x40"]);
+        if all {
+            cmd.arg("--all-samples");
+        }
+        let out = run(&mut cmd);
+        assert!(out.status.success(), "{out:?}");
+        let text = String::from_utf8_lossy(&out.stderr);
+        assert!(text.contains(&format!("from {used} samples")), "{text}");
+        assert_eq!(text.contains("--all-samples for every one"), !all, "{text}");
+        let opts = qcs::DecodeOptions {
+            max_samples: Some(used),
+            ..qcs::DecodeOptions::thumbnail(60, 40)
+        };
+        let want = qcs::decode(&bytes, &opts).expect("decode").image.to_rgb8();
+        assert!(image::open(&png).expect("a PNG").to_rgb8() == want);
+    }
+}
+
 /// Sizes and counts beyond the default limits are refused with exit 4 before anything is
 /// allocated, in every subcommand that takes them.
 #[test]

@@ -196,6 +196,90 @@ fn streaming_renders_equal_one_shot_decodes_of_the_same_prefix() {
     }
 }
 
+/// A decode capped at `max_samples` reads the levels beyond the one holding that sample
+/// only to verify them: its picture is that of the file cut after that level, and a damaged
+/// level beyond it is still an error.
+#[test]
+fn capped_decodes_equal_decodes_of_the_levels_they_need() {
+    let bytes = encode(&photo("coffee-150x100.png"), &EncodeOptions::default()).unwrap();
+    let levels = qcs::container::inspect(&bytes).levels;
+    // The byte where each level's chunk ends: the next one's start, or the end of the file.
+    let ends: Vec<usize> = (levels.iter().skip(1))
+        .map(|l| l.chunk.as_ref().unwrap().offset as usize)
+        .chain([bytes.len()])
+        .collect();
+    for (l, level) in levels.iter().enumerate() {
+        let r = &level.samples;
+        for cap in [r.start + 1, (r.start + r.end) / 2, r.end] {
+            for method in [Method::Gouraud, Method::Shepard] {
+                let opts = |max_bytes, max_samples| DecodeOptions {
+                    method,
+                    size: Some((75, 50)),
+                    max_bytes,
+                    max_samples,
+                    ..Default::default()
+                };
+                let capped = decode(&bytes, &opts(None, Some(cap))).unwrap();
+                let cut = decode(&bytes, &opts(Some(ends[l]), Some(cap))).unwrap();
+                assert_eq!(capped.samples_used, cap.min(r.end));
+                assert_eq!(capped.samples_verified, cut.samples_verified);
+                assert_eq!(capped.levels_complete, cut.levels_complete);
+                assert!(capped.image == cut.image, "level {l}, {cap} samples");
+            }
+        }
+    }
+    // A flipped byte in the last level: an error even for a decode of the first level.
+    let mut bad = bytes.clone();
+    let last = ends[ends.len() - 2] + 4;
+    bad[last] ^= 0x10;
+    let first = DecodeOptions {
+        max_samples: Some(levels[0].samples.end),
+        ..Default::default()
+    };
+    assert!(decode(&bytes, &first).is_ok());
+    assert!(matches!(decode(&bad, &first), Err(Error::Format(_))));
+}
+
+/// A thumbnail from the first 4 samples per output pixel is closer to an area-averaged
+/// downscale of the photograph than one from every sample (which aliases), at 1/8 and 1/6 of
+/// its size, by both methods.
+#[test]
+fn thumbnails_from_a_prefix_beat_thumbnails_from_every_sample() {
+    for name in ["coffee-150x100.png", "astronaut-128x128.png"] {
+        let img = photo(name);
+        let bytes = encode(&img, &EncodeOptions::default()).unwrap();
+        for f in [6, 8] {
+            let (w, h) = (img.width() / f, img.height() / f);
+            let reference = img.thumbnail_exact(w, h).to_rgb8();
+            for method in [Method::Gouraud, Method::Shepard] {
+                let thumb = DecodeOptions {
+                    method,
+                    ..DecodeOptions::thumbnail(w, h)
+                };
+                let all = DecodeOptions {
+                    max_samples: None,
+                    ..thumb.clone()
+                };
+                let t = decode(&bytes, &thumb).unwrap();
+                let a = decode(&bytes, &all).unwrap();
+                assert_eq!(t.samples_used, 4 * (w * h) as u64);
+                assert!(a.is_final && !t.is_final);
+                let (pt, pa) = (
+                    psnr(&t.image.to_rgb8(), &reference),
+                    psnr(&a.image.to_rgb8(), &reference),
+                );
+                eprintln!(
+                    "{name} 1/{f} {method:?}: {pt:.2} dB from the prefix, {pa:.2} dB from all"
+                );
+                assert!(
+                    pt > pa + 0.5,
+                    "{name} 1/{f} {method:?}: {pt:.2} vs {pa:.2} dB"
+                );
+            }
+        }
+    }
+}
+
 /// The README's photo at the default settings (1 sample per 8 pixels, raw 8-bit):
 /// the floor stated in the README.
 #[test]

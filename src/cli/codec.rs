@@ -329,9 +329,13 @@ pub struct DecodeArgs {
     /// Output scale factor.
     #[arg(long, value_parser = super::parse_scale)]
     pub scale: Option<f64>,
-    /// Use at most N samples.
-    #[arg(long, conflicts_with_all = ["bytes", "frames"])]
+    /// Use at most N samples (default: for an output much smaller than the image, the first
+    /// 4 per output pixel, which look closer to the image than all of them and cost less).
+    #[arg(long, conflicts_with_all = ["bytes", "frames", "all_samples"])]
     pub samples: Option<u64>,
+    /// Render from every sample, even for an output much smaller than the image.
+    #[arg(long)]
+    pub all_samples: bool,
     /// Use only the first K bytes of the file, as a cut download would.
     #[arg(long)]
     pub bytes: Option<usize>,
@@ -384,10 +388,13 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             .with_context(ctx)?
     };
     let size = output_size(a.size, a.scale, header.width, header.height);
+    // A small output draws on the first samples only (`DecodeOptions::thumbnail`).
+    let thumbnail = DecodeOptions::thumbnail(size.0, size.1).max_samples;
+    let cap = thumbnail.filter(|&n| !a.all_samples && n < header.total_samples);
     let opts = DecodeOptions {
         method: a.method.into(),
         size: Some(size),
-        max_samples: a.samples,
+        max_samples: a.samples.or(cap),
         max_bytes: a.bytes,
         recover: a.recover,
         ..Default::default()
@@ -402,6 +409,7 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
         );
     }
     if !quiet {
+        let capped = a.samples.is_none() && cap.is_some_and(|n| d.samples_used >= n);
         eprintln!(
             "{}: {}×{} from {} samples ({} verified, {} levels){}",
             out.display(),
@@ -410,7 +418,13 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             d.samples_used,
             d.samples_verified,
             d.levels_complete,
-            if d.is_final { ", final" } else { ", preview" }
+            if d.is_final {
+                ", final"
+            } else if capped {
+                ", 4 per output pixel: enough for this size (--all-samples for every one)"
+            } else {
+                ", preview"
+            }
         );
     }
     Ok(())

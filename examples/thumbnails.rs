@@ -1,0 +1,56 @@
+//! The README's thumbnail table: pictures much smaller than the image, rendered from every
+//! sample or from the first 4 per output pixel (`DecodeOptions::thumbnail`), against an
+//! area-averaged downscale of the photograph (`image`'s `thumbnail_exact`). Mean PSNR over a
+//! folder of photographs, each encoded at the defaults.
+//!
+//! ```text
+//! cargo run --release --example thumbnails -- ../shared/corpus/dev
+//! ```
+
+use qcs::{decode, encode, DecodeOptions, EncodeOptions, Method};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "../shared/corpus/dev".into());
+    let mut paths: Vec<_> = std::fs::read_dir(&dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+        .collect();
+    paths.sort();
+    let files = paths
+        .iter()
+        .map(|p| {
+            let img = image::open(p)?;
+            let bytes = encode(&img, &EncodeOptions::default())?;
+            Ok((img, bytes))
+        })
+        .collect::<Result<Vec<_>, Box<dyn std::error::Error>>>()?;
+    println!("| output | Gouraud, every sample | Gouraud, 4 per pixel | Shepard, every sample | Shepard, 4 per pixel |");
+    println!("|---|---|---|---|---|");
+    for f in [2u32, 3, 4, 6, 8, 12, 16] {
+        let mut sum = [0.0f64; 4];
+        for (img, bytes) in &files {
+            let (w, h) = ((img.width() / f).max(1), (img.height() / f).max(1));
+            let reference = img.thumbnail_exact(w, h).to_rgb8();
+            for (m, method) in [Method::Gouraud, Method::Shepard].into_iter().enumerate() {
+                let thumb = DecodeOptions {
+                    method,
+                    ..DecodeOptions::thumbnail(w, h)
+                };
+                let all = DecodeOptions {
+                    max_samples: None,
+                    ..thumb.clone()
+                };
+                for (k, opts) in [all, thumb].iter().enumerate() {
+                    let pic = decode(bytes, opts)?.image.to_rgb8();
+                    sum[2 * m + k] += qcs::eval::psnr(&pic, &reference)?;
+                }
+            }
+        }
+        let n = files.len() as f64;
+        let cells: Vec<String> = sum.iter().map(|s| format!("{:.2} dB", s / n)).collect();
+        println!("| 1/{f} | {} |", cells.join(" | "));
+    }
+    Ok(())
+}
