@@ -365,12 +365,40 @@ impl StreamDecoder {
     ///
     /// Before the header is complete this is [`Error::NeedMoreData`].
     pub fn render(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
+        self.render_first(u64::MAX, method, width, height)
+    }
+
+    /// Renders the picture from the first `k` samples received so far (or all, if fewer), at
+    /// `width × height`: a [`Picture::Preview`] unless it draws on every sample of the file.
+    ///
+    /// For a picture much smaller than the image, `k` =
+    /// [`THUMBNAIL_SAMPLES_PER_PIXEL`]` × width × height` renders a truer thumbnail, in less
+    /// time, than every sample does (see [`DecodeOptions::thumbnail`]).
+    ///
+    /// ```
+    /// use qcs::{Method, StreamDecoder, THUMBNAIL_SAMPLES_PER_PIXEL};
+    /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(64, 64, |x, y| image::Luma([(x ^ y) as u8])));
+    /// let bytes = qcs::encode(&img, &Default::default())?;
+    /// let mut dec = StreamDecoder::new(qcs::Limits::default());
+    /// dec.push(&bytes)?;
+    /// let thumb = dec.render_first(THUMBNAIL_SAMPLES_PER_PIXEL * 8 * 8, Method::Gouraud, 8, 8)?;
+    /// assert_eq!(thumb.decoded().samples_used, 256);
+    /// assert!(!thumb.is_final() && dec.is_complete());
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn render_first(
+        &mut self,
+        k: u64,
+        method: Method,
+        width: u32,
+        height: u32,
+    ) -> Result<Picture> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
-        let n = self.sample_count();
+        let n = self.sample_count().min(k);
         let c = self.channels();
-        // A kept set with more samples than there are now (a recovery dropped a damaged
-        // chunk's) is rebuilt.
+        // A kept set with more samples than asked for now (a recovery dropped a damaged
+        // chunk's, or a smaller `k`) is rebuilt.
         let mut set = match self.set.take() {
             Some(set) if set.len() as u64 <= n => set,
             _ => self.new_set(&h),
@@ -386,8 +414,8 @@ impl StreamDecoder {
             image: to_image(h.layout, width, height, pixels),
             samples_used: n,
             samples_verified: self.verified.min(n),
-            levels_complete: self.levels_complete,
-            is_final: self.is_complete(),
+            levels_complete: self.levels_within(&h, n),
+            is_final: n == h.total_samples && self.is_complete(),
             icc: self.icc_profile().map(<[u8]>::to_vec),
         };
         Ok(if decoded.is_final {
@@ -395,6 +423,13 @@ impl StreamDecoder {
         } else {
             Picture::Preview(decoded)
         })
+    }
+
+    /// Levels complete and verified within the first `used` samples.
+    fn levels_within(&self, h: &Header, used: u64) -> u32 {
+        (0..self.levels_complete)
+            .take_while(|&l| h.level_range(l).is_some_and(|r| r.end <= used))
+            .count() as u32
     }
 
     /// An empty sample set for the file's source size, layout and lattice frame.
@@ -456,11 +491,7 @@ impl StreamDecoder {
             set.push_site(s, &col[k * c..k * c + c]);
         }
         let icc = self.icc_profile().map(<[u8]>::to_vec);
-        // Levels complete within the samples used.
-        let within = (0..self.levels_complete)
-            .take_while(|&l| h.level_range(l).is_some_and(|r| r.end <= used))
-            .count() as u32;
-        let (verified, levels) = (self.verified, within);
+        let (verified, levels) = (self.verified, self.levels_within(&h, used));
         drop(self);
         set.settle(method);
         let pixels = set.render(method, width, height);

@@ -233,12 +233,19 @@ pub fn push(data: &[u8]) {
             let w = 1 + rng.below(32) as u32;
             let h = 1 + rng.below(32) as u32;
             let method = METHODS[rng.below(3) as usize];
-            match dec.render(method, w, h) {
+            // Sometimes from the first k samples only (k below 64).
+            let k = match rng.below(4) {
+                0 => rng.below(64),
+                _ => u64::MAX,
+            };
+            match dec.render_first(k, method, w, h) {
                 Ok(p) => {
                     let header = dec.header().cloned().expect("render implies a header");
                     check_decoded(p.decoded(), &header, w, h);
-                    assert_eq!(p.decoded().samples_used, dec.samples_available());
-                    assert_eq!(p.is_final(), dec.is_complete());
+                    let used = dec.samples_available().min(k);
+                    assert_eq!(p.decoded().samples_used, used);
+                    let all = used == header.total_samples;
+                    assert_eq!(p.is_final(), all && dec.is_complete());
                 }
                 Err(Error::NeedMoreData) => assert!(dec.header().is_none()),
                 Err(e) => panic!("render failed after a good push: {e}"),

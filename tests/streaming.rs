@@ -192,3 +192,41 @@ fn invalid_payloads_decode_alike_in_pieces() {
         }
     }
 }
+
+/// `render_first(k, …)` on the bytes received so far is the one-shot decode of those bytes
+/// capped at `k` samples, whichever `k` came before (the kept set shrinks and grows).
+#[test]
+fn render_first_equals_a_capped_decode() {
+    let bytes = file();
+    let total = qcs::container::inspect(&bytes)
+        .header
+        .expect("header")
+        .total_samples;
+    let mut dec = StreamDecoder::new(Limits::default());
+    let mut fed = 0;
+    for cut in [40, bytes.len() / 3, bytes.len()] {
+        dec.push(&bytes[fed..cut]).expect("push");
+        fed = cut;
+        for k in [total, 20, 8, 300, 9, u64::MAX] {
+            for method in [Method::Gouraud, Method::Shepard] {
+                let pic = dec.render_first(k, method, 20, 13).expect("render");
+                let opts = DecodeOptions {
+                    method,
+                    size: Some((20, 13)),
+                    max_bytes: Some(cut),
+                    max_samples: Some(k),
+                    ..Default::default()
+                };
+                let one = decode(&bytes, &opts).expect("decode");
+                let d = pic.decoded();
+                let what = format!("cut {cut}, {k} samples, {method:?}");
+                assert_eq!(d.samples_used, one.samples_used, "{what}");
+                assert_eq!(d.samples_verified, one.samples_verified, "{what}");
+                assert_eq!(d.levels_complete, one.levels_complete, "{what}");
+                assert_eq!(pic.is_final(), one.is_final, "{what}");
+                assert!(d.image == one.image, "{what}");
+            }
+        }
+    }
+    assert!(dec.is_complete());
+}
