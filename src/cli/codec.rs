@@ -419,11 +419,14 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             d.samples_verified,
             d.levels_complete,
             if d.is_final {
-                ", final"
+                ", final".into()
             } else if capped {
-                ", 4 per output pixel: enough for this size (--all-samples for every one)"
+                format!(
+                    ", {} per output pixel: enough for this size (--all-samples for every one)",
+                    qcs::THUMBNAIL_SAMPLES_PER_PIXEL
+                )
             } else {
-                ", preview"
+                ", preview".into()
             }
         );
     }
