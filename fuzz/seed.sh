@@ -8,6 +8,7 @@ for f in ../spec/vectors/*.qcs; do
     n=$(basename "$f" .qcs)
     { printf '\040\030\000'; cat "$f"; } > corpus/decode/$n
     { printf '\020\020\201'; cat "$f"; } > corpus/decode/$n-cap
+    { printf '\003\002\101'; cat "$f"; } > corpus/decode/$n-thumb
     { printf 'seed'; cat "$f"; } > corpus/push/$n
     { printf '\001\002\003\004'; cat "$f"; } > corpus/push/$n-b
     head -c 64 "$f" > corpus/header/$n

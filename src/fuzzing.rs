@@ -91,7 +91,8 @@ fn check_decoded(d: &crate::DecodedImage, header: &Header, w: u32, h: u32) {
 
 /// One-shot decode: control bytes `[w, h, flags]`, then the file.
 ///
-/// Decodes at a fuzzer-chosen size (≤ 64×64) and method, with and without recovery, and checks:
+/// Decodes at a fuzzer-chosen size (≤ 64×64), method, sample cap (flag 0x80) and as a
+/// thumbnail or not (flag 0x40), with and without recovery, and checks:
 /// the picture has the size asked for and the header's layout; verified ≤ used ≤ N; recovery
 /// never fails where the strict decoder succeeds and agrees with it then; the header seen by
 /// the decoder is the one [`Header::parse`] reads; the counts match [`RawDecoder`]'s; a
@@ -107,11 +108,13 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
     let flags = byte(ctl, 2);
     let method = METHODS[(flags % 4) as usize];
     let max_samples = (flags & 0x80 != 0).then_some((flags & 0x1F) as u64);
+    let thumbnail = flags & 0x40 != 0;
     let opts = |recover| DecodeOptions {
         method,
         size: Some((w, h)),
         max_samples,
         max_bytes: None,
+        thumbnail,
         limits: limits(),
         recover,
     };
@@ -167,7 +170,12 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
             raw_result.is_ok(),
             "raw decoder fails where decode succeeds"
         );
-        let limit = max_samples.unwrap_or(u64::MAX);
+        let limit = match thumbnail {
+            true => max_samples
+                .unwrap_or(u64::MAX)
+                .min(16 * w as u64 * h as u64),
+            false => max_samples.unwrap_or(u64::MAX),
+        };
         assert_eq!(d.samples_used, raw.samples_available().min(limit));
         assert_eq!(
             d.samples_verified,

@@ -33,9 +33,7 @@ pub mod styles;
 #[cfg(test)]
 mod testing;
 
-pub use decoder::{
-    decode, DecodeOptions, DecodedImage, Picture, StreamDecoder, THUMBNAIL_SAMPLES_PER_PIXEL,
-};
+pub use decoder::{decode, DecodeOptions, DecodedImage, Picture, StreamDecoder};
 pub use encoder::{encode, encode_to, EncodeOptions};
 pub use error::{Error, Result};
 pub use integration::{register_image_hooks, QcsImageDecoder};

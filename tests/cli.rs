@@ -123,34 +123,35 @@ fn rocket_qcs(name: &str) -> PathBuf {
     file
 }
 
-/// An output much smaller than the image draws on the first 4 samples per output pixel
-/// (`DecodeOptions::thumbnail`), and says so; `--all-samples` draws on every one.
+/// An output much smaller than the image is a thumbnail (`DecodeOptions::thumbnail`), and
+/// says so; `--no-thumbnail` renders every sample at its pixel centres.
 #[test]
-fn small_outputs_use_the_samples_they_need() {
+fn small_outputs_are_thumbnails() {
     let file = rocket_qcs("thumb.qcs");
     let bytes = std::fs::read(&file).expect("read");
     let total = qcs::container::inspect(&bytes)
         .header
         .expect("header")
         .total_samples;
-    for (all, used) in [(false, 4 * 60 * 40), (true, total)] {
-        let png = scratch(&format!("thumb-{all}.png"));
+    for plain in [false, true] {
+        let png = scratch(&format!("thumb-{plain}.png"));
         let mut cmd = qcs();
         cmd.arg("decode")
             .arg(&file)
             .arg(&png)
-            .args(["--size", "60x40"]);
-        if all {
-            cmd.arg("--all-samples");
+            .args(["--size", "30x20"]);
+        if plain {
+            cmd.arg("--no-thumbnail");
         }
         let out = run(&mut cmd);
         assert!(out.status.success(), "{out:?}");
         let text = String::from_utf8_lossy(&out.stderr);
+        let used = if plain { total } else { 16 * 30 * 20 };
         assert!(text.contains(&format!("from {used} samples")), "{text}");
-        assert_eq!(text.contains("--all-samples for every one"), !all, "{text}");
+        assert_eq!(text.contains("a thumbnail"), !plain, "{text}");
         let opts = qcs::DecodeOptions {
-            max_samples: Some(used),
-            ..qcs::DecodeOptions::thumbnail(60, 40)
+            thumbnail: !plain,
+            ..qcs::DecodeOptions::thumbnail(30, 20)
         };
         let want = qcs::decode(&bytes, &opts).expect("decode").image.to_rgb8();
         assert!(image::open(&png).expect("a PNG").to_rgb8() == want);

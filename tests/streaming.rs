@@ -230,3 +230,30 @@ fn render_first_equals_a_capped_decode() {
     }
     assert!(dec.is_complete());
 }
+
+/// `render_thumbnail` on the bytes received so far is the one-shot thumbnail of those bytes.
+#[test]
+fn render_thumbnail_equals_a_one_shot_thumbnail() {
+    let bytes = file();
+    let mut dec = StreamDecoder::new(Limits::default());
+    let mut fed = 0;
+    for cut in [40, bytes.len() / 2, bytes.len()] {
+        dec.push(&bytes[fed..cut]).expect("push");
+        fed = cut;
+        for (w, h) in [(6, 4), (12, 8), (48, 32)] {
+            for method in [Method::Gouraud, Method::Shepard] {
+                let pic = dec.render_thumbnail(method, w, h).expect("render");
+                let opts = DecodeOptions {
+                    method,
+                    max_bytes: Some(cut),
+                    ..DecodeOptions::thumbnail(w, h)
+                };
+                let one = decode(&bytes, &opts).expect("decode");
+                let what = format!("cut {cut}, {w}×{h}, {method:?}");
+                assert_eq!(pic.decoded().samples_used, one.samples_used, "{what}");
+                assert_eq!(pic.is_final(), one.is_final, "{what}");
+                assert!(pic.decoded().image == one.image, "{what}");
+            }
+        }
+    }
+}

@@ -329,13 +329,14 @@ pub struct DecodeArgs {
     /// Output scale factor.
     #[arg(long, value_parser = super::parse_scale)]
     pub scale: Option<f64>,
-    /// Use at most N samples (default: for an output much smaller than the image, the first
-    /// 4 per output pixel, which look closer to the image than all of them and cost less).
-    #[arg(long, conflicts_with_all = ["bytes", "frames", "all_samples"])]
+    /// Use at most N samples.
+    #[arg(long, conflicts_with_all = ["bytes", "frames"])]
     pub samples: Option<u64>,
-    /// Render from every sample, even for an output much smaller than the image.
+    /// Render every sample at the output's pixel centres, even for an output much smaller
+    /// than the image (which is otherwise a thumbnail: the first samples it needs, each
+    /// pixel the mean of a square of subpixels; closer to the image, and faster).
     #[arg(long)]
-    pub all_samples: bool,
+    pub no_thumbnail: bool,
     /// Use only the first K bytes of the file, as a cut download would.
     #[arg(long)]
     pub bytes: Option<usize>,
@@ -388,14 +389,12 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             .with_context(ctx)?
     };
     let size = output_size(a.size, a.scale, header.width, header.height);
-    // A small output draws on the first samples only (`DecodeOptions::thumbnail`).
-    let thumbnail = DecodeOptions::thumbnail(size.0, size.1).max_samples;
-    let cap = thumbnail.filter(|&n| !a.all_samples && n < header.total_samples);
     let opts = DecodeOptions {
         method: a.method.into(),
         size: Some(size),
-        max_samples: a.samples.or(cap),
+        max_samples: a.samples,
         max_bytes: a.bytes,
+        thumbnail: !a.no_thumbnail,
         recover: a.recover,
         ..Default::default()
     };
@@ -409,7 +408,10 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
         );
     }
     if !quiet {
-        let capped = a.samples.is_none() && cap.is_some_and(|n| d.samples_used >= n);
+        // A thumbnail differs from the plain render from 2.25 samples per output pixel on
+        // (2 × 2 subpixels each).
+        let pixels = size.0 as f64 * size.1 as f64;
+        let thumbnail = opts.thumbnail && d.samples_used as f64 >= 2.25 * pixels;
         eprintln!(
             "{}: {}×{} from {} samples ({} verified, {} levels){}",
             out.display(),
@@ -418,15 +420,12 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             d.samples_used,
             d.samples_verified,
             d.levels_complete,
-            if d.is_final {
-                ", final".into()
-            } else if capped {
-                format!(
-                    ", {} per output pixel: enough for this size (--all-samples for every one)",
-                    qcs::THUMBNAIL_SAMPLES_PER_PIXEL
-                )
+            if thumbnail {
+                ", a thumbnail (--no-thumbnail for the plain render)"
+            } else if d.is_final {
+                ", final"
             } else {
-                ", preview".into()
+                ", preview"
             }
         );
     }
@@ -777,8 +776,9 @@ pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
                 ((h.height as f64 * f).round() as u32).max(1),
             )
         });
+        // As `qcs decode` draws an output much smaller than the image.
         let pic = dec
-            .render(Method::Gouraud, size.0, size.1)
+            .render_thumbnail(Method::Gouraud, size.0, size.1)
             .with_context(ctx)?;
         let mut rgba = pic.decoded().image.to_rgba8();
         stamp(&mut rgba, &format!("{cut}B"));
