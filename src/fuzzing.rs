@@ -190,7 +190,8 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
 }
 
 /// The push decoder: control bytes `[seed × 4]`, then the file, fed in pseudo-random chunks
-/// (0..=64 bytes, sometimes one byte) with renders at random points and sizes (≤ 32×32).
+/// (0..=64 bytes, sometimes one byte) with renders at random points and sizes (≤ 32×32),
+/// some from the first samples only, some thumbnails.
 ///
 /// Checks: a push error is final (the decoder stays poisoned); the counts never go down and
 /// match a one-shot [`crate::decode`] of the same bytes at the end; renders have the size asked
@@ -241,12 +242,17 @@ pub fn push(data: &[u8]) {
             let w = 1 + rng.below(32) as u32;
             let h = 1 + rng.below(32) as u32;
             let method = METHODS[rng.below(3) as usize];
-            // Sometimes from the first k samples only (k below 64).
-            let k = match rng.below(4) {
-                0 => rng.below(64),
-                _ => u64::MAX,
+            // Sometimes from the first k samples only (k below 64), sometimes a thumbnail
+            // (at most 16 samples per pixel).
+            let (k, r) = match rng.below(4) {
+                0 => {
+                    let k = rng.below(64);
+                    (k, dec.render_first(k, method, w, h))
+                }
+                1 => (16 * w as u64 * h as u64, dec.render_thumbnail(method, w, h)),
+                _ => (u64::MAX, dec.render(method, w, h)),
             };
-            match dec.render_first(k, method, w, h) {
+            match r {
                 Ok(p) => {
                     let header = dec.header().cloned().expect("render implies a header");
                     check_decoded(p.decoded(), &header, w, h);
