@@ -155,6 +155,28 @@ fn small_outputs_are_thumbnails() {
         };
         let want = qcs::decode(&bytes, &opts).expect("decode").image.to_rgb8();
         assert!(image::open(&png).expect("a PNG").to_rgb8() == want);
+        // `--frames` draws its pictures the same way: the last one is that picture.
+        let dir = scratch(&format!("thumb-frames-{plain}"));
+        let mut cmd = qcs();
+        cmd.args(["-q", "decode"])
+            .arg(&file)
+            .arg("--frames")
+            .arg(&dir);
+        cmd.args(["--size", "30x20"]);
+        if plain {
+            cmd.arg("--no-thumbnail");
+        }
+        assert!(run(&mut cmd).status.success());
+        let mut frames: Vec<_> = std::fs::read_dir(&dir)
+            .expect("frames")
+            .map(|e| e.expect("entry").path())
+            .collect();
+        frames.sort();
+        let last = frames.last().expect("a frame");
+        assert!(
+            image::open(last).expect("a PNG").to_rgb8() == want,
+            "{last:?}"
+        );
     }
 }
 

@@ -456,7 +456,11 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
             continue;
         };
         let size = output_size(a.size, a.scale, h.width, h.height);
-        let pic = dec.render(a.method.into(), size.0, size.1)?;
+        // Thumbnails where the output would be one, as the picture `qcs decode` writes.
+        let pic = match a.no_thumbnail {
+            true => dec.render(a.method.into(), size.0, size.1)?,
+            false => dec.render_thumbnail(a.method.into(), size.0, size.1)?,
+        };
         let kind = if pic.is_final() { "final" } else { "preview" };
         let path = dir.join(format!("frame-{n:03}-{cut:08}B-{kind}.png"));
         let d = pic.decoded();
