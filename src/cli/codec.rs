@@ -332,9 +332,10 @@ pub struct DecodeArgs {
     /// Use at most N samples.
     #[arg(long, conflicts_with_all = ["bytes", "frames"])]
     pub samples: Option<u64>,
-    /// Render every sample at the output's pixel centres, even for an output much smaller
-    /// than the image (which is otherwise a thumbnail: the first samples it needs, each
-    /// pixel the mean of a square of subpixels; closer to the image, and faster).
+    /// Render at the output's pixel centres from every sample (or --samples), even for an
+    /// output much smaller than the image, which is otherwise a thumbnail: from the first
+    /// samples it needs, each pixel the mean of a square of subpixels (closer to the image,
+    /// and faster).
     #[arg(long)]
     pub no_thumbnail: bool,
     /// Use only the first K bytes of the file, as a cut download would.
