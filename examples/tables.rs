@@ -9,15 +9,10 @@ use qcs::reconstruction::{render, Method};
 use qcs::sampling::{SampleColour, SourceImage};
 use qcs::sites::Quasicrystal;
 
+mod common;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let dir = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "../shared/corpus/dev".into());
-    let mut paths: Vec<_> = std::fs::read_dir(&dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "png"))
-        .collect();
-    paths.sort();
+    let paths = common::photo_paths()?;
     let rules = [
         ("nearest", SampleColour::Nearest),
         ("bilinear", SampleColour::Bilinear),

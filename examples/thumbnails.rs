@@ -9,15 +9,10 @@
 
 use qcs::{decode, encode, DecodeOptions, EncodeOptions, Method};
 
+mod common;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let dir = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "../shared/corpus/dev".into());
-    let mut paths: Vec<_> = std::fs::read_dir(&dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "png"))
-        .collect();
-    paths.sort();
+    let paths = common::photo_paths()?;
     let files = paths
         .iter()
         .map(|p| {
