@@ -554,7 +554,8 @@ pub struct DecodeOptions {
     pub size: Option<(u32, u32)>,
     /// Use at most this many samples. The levels after the one that holds the last of them
     /// are read only to check them, not decoded, so the decode costs what those samples cost
-    /// (see [`DecodeOptions::thumbnail`]).
+    /// (see [`DecodeOptions::thumbnail`]), and [`Limits::max_samples`] applies to the levels
+    /// decoded, not to the file's count.
     pub max_samples: Option<u64>,
     /// Use only the first this many bytes, as a cut download would.
     pub max_bytes: Option<usize>,
@@ -632,7 +633,9 @@ impl DecodeOptions {
     /// the detail at that one point. Measured in the README (8 photographs, mean PSNR
     /// against `image`'s area-averaged downscale, Gouraud): at 1/8 of their size 40.1 dB
     /// against 28.1 dB for the plain render, at 1/16 39.9 against 23.9 dB; a 120 × 90
-    /// thumbnail of a 12-megapixel file in a fraction of the plain render's time.
+    /// thumbnail of a 12-megapixel file in a fraction of the plain render's time. A file
+    /// with more samples than [`Limits::max_samples`] has a thumbnail when the levels it
+    /// draws on fit in the limit.
     ///
     /// ```
     /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x * y) as u8])));
@@ -669,14 +672,21 @@ impl DecodeOptions {
 /// ```
 pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     let bytes = &bytes[..opts.max_bytes.unwrap_or(usize::MAX).min(bytes.len())];
-    let mut dec = StreamDecoder::with_options(
-        ParserOptions::with_limits(opts.limits.clone()).recover(opts.recover),
-    );
     let mut max_samples = opts.max_samples.unwrap_or(u64::MAX);
     // A thumbnail at the image's own size draws on every sample anyway.
     if let (true, Some((w, h))) = (opts.thumbnail, opts.size) {
         max_samples = max_samples.min(thumbnail_samples(w, h));
     }
+    // The sample limit bounds the samples decoded: a capped decode (a thumbnail) decodes the
+    // levels up to the cap, so a file with more samples than the limit is fine if they are few.
+    let mut limits = opts.limits.clone();
+    if let Ok((h, _)) = Header::parse(bytes) {
+        if decoded_samples(&h, max_samples) <= limits.max_samples {
+            limits.max_samples = limits.max_samples.max(h.total_samples);
+        }
+    }
+    let mut dec =
+        StreamDecoder::with_options(ParserOptions::with_limits(limits).recover(opts.recover));
     dec.decode_limit = max_samples;
     let build_cells = opts.method == Method::Gouraud && rayon::current_num_threads() > 1;
     let seed = push_whole(&mut dec, bytes, max_samples, build_cells)?;
@@ -690,6 +700,15 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     let f = thumbnail_factor(k, w, ht, &opts.limits);
     let d = dec.render_prefix(k, opts.method, w * f, ht * f, seed)?;
     Ok(shrink(d, f))
+}
+
+/// The samples a decode capped at `cap` decodes: those of the levels that start before it.
+fn decoded_samples(h: &Header, cap: u64) -> u64 {
+    (0..h.level_count())
+        .map_while(|l| h.level_range(l))
+        .take_while(|r| r.start < cap)
+        .last()
+        .map_or(0, |r| r.end)
 }
 
 /// Pushes `bytes` (a whole buffer) into the fresh decoder `dec`, the sites of the levels

@@ -14,13 +14,18 @@ use std::io::Write;
 /// let opts = qcs::EncodeOptions { samples: Some(5000), ..Default::default() };
 /// assert_eq!(opts.sample_count(512, 512), 5000);
 /// assert_eq!(qcs::EncodeOptions::default().sample_count(512, 512), 65536);
+/// // A 24-megapixel photo gets what a default decoder takes.
+/// assert_eq!(qcs::EncodeOptions::default().sample_count(6000, 4000), 1 << 22);
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodeOptions {
     /// Total samples N; `None` uses `density`.
     pub samples: Option<u64>,
-    /// Samples per pixel when `samples` is `None` (default 1/4): N = ⌊W·H·density⌋, at least 1.
-    /// A multiple of 1/256 is stored in one header byte.
+    /// Samples per pixel when `samples` is `None` (default 1/4): N = ⌊W·H·density⌋, at least 1
+    /// and at most 2^22, the default [`Limits::max_samples`](crate::Limits::max_samples), so
+    /// that a decoder with the default limits decodes the whole file (above 16.7 megapixels
+    /// the default density gives fewer samples per pixel; set `samples` for more). A multiple
+    /// of 1/256 is stored in one header byte.
     pub density: f64,
     /// The colour coding (default: predictive at quality
     /// [`DEFAULT_QUALITY`](crate::coding::predictive::DEFAULT_QUALITY)).
@@ -60,7 +65,8 @@ impl EncodeOptions {
         let px = width as u64 * height as u64;
         let n = match self.samples {
             Some(n) => n,
-            None => (self.density * px as f64).floor() as u64,
+            None => ((self.density * px as f64).floor() as u64)
+                .min(crate::Limits::default().max_samples),
         };
         n.clamp(1, px.max(1))
     }

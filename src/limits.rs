@@ -29,7 +29,9 @@ pub struct Limits {
     pub max_image_pixels: u64,
     /// Largest output picture (width × height) a render may produce.
     pub max_output_pixels: u64,
-    /// Largest number of samples (the header's N) that will be decoded and triangulated.
+    /// Largest number of samples that will be decoded and triangulated: the header's N, or
+    /// for a one-shot decode capped at fewer ([`crate::DecodeOptions::max_samples`], a
+    /// thumbnail), the samples of the levels it decodes.
     ///
     /// This is also the bound on the decoder's memory for sites, colours and the triangulation,
     /// which grows with the samples of the levels begun (never with N itself). A one-shot

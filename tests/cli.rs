@@ -230,6 +230,39 @@ fn limits_hold_in_every_subcommand() {
     assert!(!qcs_out.exists());
 }
 
+/// A file with more samples than the default limit decodes as a thumbnail, which needs only
+/// its first levels; at full size it is refused (exit 4) with a hint. The file is flat grey:
+/// its levels' predictive payloads are empty (every residual zero), 5 million samples in a
+/// few hundred bytes.
+#[test]
+fn files_beyond_the_sample_limit_decode_as_thumbnails() {
+    use qcs::container::{ContainerWriter, Header, Layout};
+    let coding = qcs::coding::predictive::Params::default().coding();
+    let header = Header::new(2500, 2500, Layout::Grey, 5_000_000, 127, coding);
+    assert!(header.total_samples > qcs::Limits::default().max_samples);
+    let mut w = ContainerWriter::new(Vec::new(), &header).expect("header");
+    for _ in 0..header.level_count() {
+        w.write_level(&[]).expect("level");
+    }
+    let file = scratch("over-limit.qcs");
+    std::fs::write(&file, w.finish().expect("file")).expect("write");
+    let png = scratch("over-limit.png");
+    let out = run(qcs()
+        .arg("decode")
+        .arg(&file)
+        .arg(&png)
+        .args(["--size", "30x30"]));
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(text.contains("from 14400 samples"), "{text}");
+    let thumb = image::open(&png).expect("a PNG").to_luma8();
+    assert_eq!(thumb.dimensions(), (30, 30));
+    assert!(thumb.pixels().all(|p| p == thumb.get_pixel(0, 0)));
+    let (c, err) = code(qcs().arg("decode").arg(&file).arg(&png));
+    assert_eq!(c, Some(4), "{err}");
+    assert!(err.contains("--size"), "{err}");
+}
+
 /// Nonsense numbers are usage errors (exit 2), not a silent one-sample file or exit 1.
 #[test]
 fn nonsense_numbers_are_usage_errors() {

@@ -240,6 +240,63 @@ fn capped_decodes_equal_decodes_of_the_levels_they_need() {
     assert!(matches!(decode(&bad, &first), Err(Error::Format(_))));
 }
 
+/// `Limits::max_samples` bounds the samples a decode decodes, not the header's N: a capped
+/// decode or a thumbnail of a file with more samples than the limit works when the levels it
+/// decodes fit, and is the picture a decode without the limit gives.
+#[test]
+fn capped_decodes_need_only_their_levels_within_the_limits() {
+    let bytes = encode(&photo("coffee-150x100.png"), &EncodeOptions::default()).unwrap();
+    let levels = qcs::container::inspect(&bytes).levels;
+    let n = levels.last().unwrap().samples.end;
+    let limit = levels[levels.len() - 2].samples.end; // all but the last level
+    let mut limits = qcs::Limits::default();
+    limits.max_samples = limit;
+    let whole = DecodeOptions {
+        limits: limits.clone(),
+        ..Default::default()
+    };
+    assert!(matches!(
+        decode(&bytes, &whole),
+        Err(Error::Limits(qcs::limits::LimitError::Samples(s, l))) if s == n && l == limit
+    ));
+    // Caps within the levels that fit, and one sample more (the last level).
+    for (cap, fits) in [
+        (1, true),
+        (limit / 2, true),
+        (limit, true),
+        (limit + 1, false),
+    ] {
+        for thumbnail in [false, true] {
+            let opts = |limits: qcs::Limits| DecodeOptions {
+                max_samples: Some(cap),
+                size: Some((15, 10)),
+                thumbnail,
+                limits,
+                ..Default::default()
+            };
+            let got = decode(&bytes, &opts(limits.clone()));
+            if !fits {
+                assert!(matches!(got, Err(Error::Limits(_))), "{cap} samples");
+                continue;
+            }
+            let want = decode(&bytes, &opts(qcs::Limits::default())).unwrap();
+            let got = got.unwrap();
+            assert_eq!(got.samples_used, want.samples_used);
+            assert!(got.samples_used <= limit && !got.is_final);
+            assert!(
+                got.image == want.image,
+                "{cap} samples, thumbnail {thumbnail}"
+            );
+        }
+    }
+    // A thumbnail whose 16 samples per pixel fit (3 × 2 pixels: 96 samples).
+    let thumb = DecodeOptions {
+        limits,
+        ..DecodeOptions::thumbnail(3, 2)
+    };
+    assert_eq!(decode(&bytes, &thumb).unwrap().samples_used, 96);
+}
+
 /// A thumbnail (`DecodeOptions::thumbnail`) is the plain render of its first samples at f × f
 /// times the size, each f × f square averaged (to within rounding, and not shifted); and it
 /// is far closer to an area-averaged downscale of the photograph than the plain render of

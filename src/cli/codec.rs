@@ -130,13 +130,15 @@ struct Encoded {
     input: u64,
     output: u64,
     icc: Option<usize>,
+    /// The samples the density asked for, when they were capped at the default limit.
+    capped_from: Option<u64>,
 }
 
 fn encode_file(
     input: &Path,
     output: &Path,
     opts: &EncodeOptions,
-    strip_icc: bool,
+    (strip_icc, density_given): (bool, bool),
 ) -> Result<Encoded> {
     let (img, icc) = super::read_image(input)?;
     let mut opts = opts.clone();
@@ -147,8 +149,16 @@ fn encode_file(
         .check_image(img.width() as u64, img.height() as u64)
         .map_err(qcs::Error::from)
         .with_context(|| format!("cannot encode {}", input.display()))?;
+    // The default density's count is capped at the limit (`EncodeOptions::density`); an
+    // explicit --samples or --density beyond it is refused.
+    let px = img.width() as u64 * img.height() as u64;
+    let asked = (opts.samples)
+        .unwrap_or((opts.density * px as f64).floor() as u64)
+        .min(px);
+    let capped = opts.samples.is_none() && !density_given && asked > limits.max_samples;
+    let capped_from = capped.then_some(asked);
     limits
-        .check_samples(opts.sample_count(img.width(), img.height()))
+        .check_samples(if capped { 0 } else { asked })
         .map_err(qcs::Error::from)
         .with_context(|| {
             format!(
@@ -180,6 +190,7 @@ fn encode_file(
         input: std::fs::metadata(input).map(|m| m.len()).unwrap_or(0),
         output: bytes.len() as u64,
         icc: opts.icc.as_ref().map(Vec::len),
+        capped_from,
     })
 }
 
@@ -210,6 +221,7 @@ fn is_image(p: &Path) -> bool {
 
 pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
     let opts = a.options();
+    let flags = (a.strip_icc, a.density.is_some());
     let Some(dir) = &a.out_dir else {
         if a.paths.len() != 2 {
             bail!(
@@ -222,7 +234,7 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
                 a.paths[1].display()
             );
         }
-        let e = encode_file(&a.paths[0], &a.paths[1], &opts, a.strip_icc)?;
+        let e = encode_file(&a.paths[0], &a.paths[1], &opts, flags)?;
         if !quiet {
             eprintln!(
                 "{} → {}: {} → {} bytes{}",
@@ -234,6 +246,13 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
                     .map(|n| format!(" (with its {n}-byte ICC profile)"))
                     .unwrap_or_default()
             );
+            if let Some(asked) = e.capped_from {
+                eprintln!(
+                    "  {} samples, not the {asked} of the density: the most `qcs decode` takes \
+                     by default",
+                    qcs::Limits::default().max_samples
+                );
+            }
         }
         return Ok(());
     };
@@ -276,7 +295,7 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
     let results: Vec<Result<Encoded>> = inputs
         .par_iter()
         .map(|p| {
-            let r = encode_file(p, &out_path(dir, p), &opts, a.strip_icc);
+            let r = encode_file(p, &out_path(dir, p), &opts, flags);
             bar.inc(1);
             r
         })
@@ -380,14 +399,14 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
     };
     // An output the image crate cannot write is refused before the decode.
     super::output_format(out)?;
-    let header = {
-        let mut d = StreamDecoder::new(qcs::Limits::default());
-        d.push(&bytes[..bytes.len().min(qcs::container::MAX_HEADER_LEN)])
-            .with_context(ctx)?;
-        d.header()
-            .cloned()
-            .ok_or(qcs::Error::NeedMoreData)
-            .with_context(ctx)?
+    // The header's size is the default output size; the decode checks it against the limits
+    // (a thumbnail of a file with more samples than they allow is fine).
+    let header = match qcs::container::Header::parse(&bytes) {
+        Ok((h, _)) => h,
+        Err(qcs::container::FormatError::TruncatedHeader { .. }) => {
+            return Err(qcs::Error::NeedMoreData).with_context(ctx)
+        }
+        Err(e) => return Err(qcs::Error::Format(e)).with_context(ctx),
     };
     let size = output_size(a.size, a.scale, header.width, header.height);
     let opts = DecodeOptions {
@@ -399,7 +418,18 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
         recover: a.recover,
         ..Default::default()
     };
-    let d = qcs::decode(&bytes, &opts).with_context(ctx)?;
+    let d = match qcs::decode(&bytes, &opts) {
+        Err(e @ qcs::Error::Limits(qcs::limits::LimitError::Samples(..))) => {
+            return Err(e).with_context(|| {
+                format!(
+                    "{} (a smaller output, --size or --scale, or --samples N decodes only the \
+                     samples it needs)",
+                    ctx()
+                )
+            })
+        }
+        d => d.with_context(ctx)?,
+    };
     let kept = super::save_image_icc(&d.image, out, d.icc.as_deref())?;
     if !kept && !quiet {
         eprintln!(
