@@ -32,6 +32,12 @@ fn encode_info_decode() {
     assert!(info.status.success(), "{info:?}");
     let text = String::from_utf8_lossy(&info.stdout);
     assert!(text.contains("480×320"), "{text}");
+    assert!(text.contains("end: a complete file"), "{text}");
+    let cut = scratch("rocket-cut.qcs");
+    std::fs::write(&cut, &std::fs::read(&file).expect("read")[..40]).expect("write");
+    let info = run(qcs().arg("info").arg(&cut));
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(text.contains("end: inside chunk #0 'L' at byte "), "{text}");
     let dec = run(qcs()
         .args(["-q", "decode"])
         .arg(&file)

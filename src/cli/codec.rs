@@ -601,7 +601,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
         }
     }
     say!(
-        "samples: {} available, {} verified; end: {:?}",
+        "samples: {} available, {} verified; end: {}",
         ins.samples_available,
         ins.samples_verified,
         ins.end

@@ -152,6 +152,25 @@ pub enum EndState {
     Failed,
 }
 
+impl std::fmt::Display for EndState {
+    /// What the state means to someone reading `qcs info`.
+    ///
+    /// ```
+    /// use qcs::container::EndState;
+    /// assert_eq!(EndState::Complete.to_string(), "a complete file");
+    /// ```
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            EndState::InHeader => write!(f, "inside the header"),
+            EndState::BetweenChunks => write!(f, "between chunks, with levels missing"),
+            EndState::InChunk(c) => write!(f, "inside {c}"),
+            EndState::Complete => write!(f, "a complete file"),
+            EndState::Stopped => write!(f, "stopped at a damaged chunk (recovery)"),
+            EndState::Failed => write!(f, "failed"),
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 enum Kind {
     Level { level: u32, samples: Range<u64> },
