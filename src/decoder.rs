@@ -111,8 +111,27 @@ impl StreamDecoder {
     }
 
     /// A decoder with parser options: `recover(true)` keeps the longest verified prefix of a
-    /// damaged file instead of failing (see [`StreamDecoder::stopped`]).
+    /// damaged file instead of failing (see [`StreamDecoder::stopped`]); `decode_before(k)`
+    /// decodes only the levels that start before sample `k` (the later ones are parsed and
+    /// verified, not decoded), for a stream shown at a size that needs no more, e.g.
+    /// [`thumbnail_samples`] for [`StreamDecoder::render_thumbnail`]. The sample limit then
+    /// applies to those levels, not to the file's count.
+    ///
+    /// ```
+    /// use qcs::container::ParserOptions;
+    /// use qcs::{Method, StreamDecoder};
+    /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x * y) as u8])));
+    /// let bytes = qcs::encode(&img, &Default::default())?;
+    /// let opts = ParserOptions::default().decode_before(qcs::thumbnail_samples(6, 6));
+    /// let mut dec = StreamDecoder::with_options(opts);
+    /// dec.push(&bytes)?;
+    /// assert!(dec.is_complete() && dec.samples_available() < 96 * 96 / 4);
+    /// let thumb = dec.render_thumbnail(Method::Gouraud, 6, 6)?;
+    /// assert_eq!(thumb.decoded().samples_used, 16 * 6 * 6);
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
     pub fn with_options(opts: ParserOptions) -> Self {
+        let decode_limit = opts.decode_before.unwrap_or(u64::MAX);
         StreamDecoder {
             limits: opts.limits.clone(),
             parser: Parser::new(opts),
@@ -128,7 +147,7 @@ impl StreamDecoder {
             set: None,
             stopped: None,
             metadata: Vec::new(),
-            decode_limit: u64::MAX,
+            decode_limit,
             skipping: false,
             failed: false,
         }
@@ -302,11 +321,12 @@ impl StreamDecoder {
         self.levels_complete
     }
 
-    /// Whether every sample of the file has arrived and is verified.
+    /// Whether every level of the file has arrived and is verified (with
+    /// [`ParserOptions::decode_before`], those past it are verified but not decoded).
     pub fn is_complete(&self) -> bool {
         self.header
             .as_ref()
-            .is_some_and(|h| self.verified == h.total_samples)
+            .is_some_and(|h| self.levels_complete == h.level_count())
     }
 
     /// In recovery mode, the error that stopped decoding (everything verified before it is kept).
@@ -589,8 +609,13 @@ const THUMBNAIL_SAMPLES_PER_PIXEL: u64 = 16;
 /// Largest side of the square of rendered pixels a thumbnail pixel averages.
 const THUMBNAIL_MAX_FACTOR: u32 = 4;
 
-/// The most samples a `width × height` thumbnail draws on.
-fn thumbnail_samples(width: u32, height: u32) -> u64 {
+/// The most samples a `width × height` thumbnail ([`DecodeOptions::thumbnail`],
+/// [`StreamDecoder::render_thumbnail`]) draws on: 16 per pixel.
+///
+/// ```
+/// assert_eq!(qcs::thumbnail_samples(120, 90), 172_800);
+/// ```
+pub fn thumbnail_samples(width: u32, height: u32) -> u64 {
     (width as u64 * height as u64).saturating_mul(THUMBNAIL_SAMPLES_PER_PIXEL)
 }
 
@@ -677,17 +702,11 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     if let (true, Some((w, h))) = (opts.thumbnail, opts.size) {
         max_samples = max_samples.min(thumbnail_samples(w, h));
     }
-    // The sample limit bounds the samples decoded: a capped decode (a thumbnail) decodes the
-    // levels up to the cap, so a file with more samples than the limit is fine if they are few.
-    let mut limits = opts.limits.clone();
-    if let Ok((h, _)) = Header::parse(bytes) {
-        if decoded_samples(&h, max_samples) <= limits.max_samples {
-            limits.max_samples = limits.max_samples.max(h.total_samples);
-        }
-    }
-    let mut dec =
-        StreamDecoder::with_options(ParserOptions::with_limits(limits).recover(opts.recover));
-    dec.decode_limit = max_samples;
+    let mut dec = StreamDecoder::with_options(
+        ParserOptions::with_limits(opts.limits.clone())
+            .recover(opts.recover)
+            .decode_before(max_samples),
+    );
     let build_cells = opts.method == Method::Gouraud && rayon::current_num_threads() > 1;
     let seed = push_whole(&mut dec, bytes, max_samples, build_cells)?;
     let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
@@ -700,15 +719,6 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     let f = thumbnail_factor(k, w, ht, &opts.limits);
     let d = dec.render_prefix(k, opts.method, w * f, ht * f, seed)?;
     Ok(shrink(d, f))
-}
-
-/// The samples a decode capped at `cap` decodes: those of the levels that start before it.
-fn decoded_samples(h: &Header, cap: u64) -> u64 {
-    (0..h.level_count())
-        .map_while(|l| h.level_range(l))
-        .take_while(|r| r.start < cap)
-        .last()
-        .map_or(0, |r| r.end)
 }
 
 /// Pushes `bytes` (a whole buffer) into the fresh decoder `dec`, the sites of the levels

@@ -191,7 +191,8 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
 
 /// The push decoder: control bytes `[seed × 4]`, then the file, fed in pseudo-random chunks
 /// (0..=64 bytes, sometimes one byte) with renders at random points and sizes (≤ 32×32),
-/// some from the first samples only, some thumbnails.
+/// some from the first samples only, some thumbnails; some decoders decode only the levels
+/// before a sample ([`ParserOptions::decode_before`]).
 ///
 /// Checks: a push error is final (the decoder stays poisoned); the counts never go down and
 /// match a one-shot [`crate::decode`] of the same bytes at the end; renders have the size asked
@@ -204,7 +205,13 @@ pub fn push(data: &[u8]) {
     let (ctl, file) = split(data, 4);
     let mut rng = Rng::new(ctl);
     let recover = rng.below(4) == 0;
-    let opts = ParserOptions::with_limits(limits()).recover(recover);
+    let mut opts = ParserOptions::with_limits(limits()).recover(recover);
+    // Sometimes decoding only the levels that start before a sample (below 256), as for
+    // thumbnails: the levels after it are verified, not decoded.
+    let cap = (rng.below(4) == 0).then(|| rng.below(256));
+    if let Some(k) = cap {
+        opts = opts.decode_before(k);
+    }
     let mut dec = StreamDecoder::with_options(opts.clone());
     let mut pos = 0;
     let mut failed = false;
@@ -236,6 +243,9 @@ pub fn push(data: &[u8]) {
             "verified went down"
         );
         assert!(dec.samples_verified() <= dec.samples_available());
+        if let (Some(k), Some(h)) = (cap, dec.header()) {
+            assert!(dec.samples_available() <= h.samples_of_levels_before(k));
+        }
         last_avail = dec.samples_available();
         last_verified = dec.samples_verified();
         if rng.below(4) == 0 {

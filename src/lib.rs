@@ -33,7 +33,7 @@ pub mod styles;
 #[cfg(test)]
 mod testing;
 
-pub use decoder::{decode, DecodeOptions, DecodedImage, Picture, StreamDecoder};
+pub use decoder::{decode, thumbnail_samples, DecodeOptions, DecodedImage, Picture, StreamDecoder};
 pub use encoder::{encode, encode_to, EncodeOptions};
 pub use error::{Error, Result};
 pub use integration::{register_image_hooks, QcsImageDecoder};

@@ -267,6 +267,30 @@ fn files_beyond_the_sample_limit_decode_as_thumbnails() {
     let (c, err) = code(qcs().arg("decode").arg(&file).arg(&png));
     assert_eq!(c, Some(4), "{err}");
     assert!(err.contains("--size"), "{err}");
+    // Streamed, as frames and as a GIF, the same: the last frame is the thumbnail.
+    let dir = scratch("over-limit-frames");
+    let out = run(qcs()
+        .args(["-q", "decode"])
+        .arg(&file)
+        .arg("--frames")
+        .arg(&dir)
+        .args(["--size", "30x30"]));
+    assert!(out.status.success(), "{out:?}");
+    let mut frames: Vec<_> = std::fs::read_dir(&dir)
+        .expect("frames")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    frames.sort();
+    let last = frames.last().expect("a frame");
+    assert!(last.to_string_lossy().ends_with("-final.png"), "{last:?}");
+    assert!(image::open(last).expect("a PNG").to_luma8() == thumb);
+    let gif = scratch("over-limit.gif");
+    let out = run(qcs()
+        .args(["-q", "preview"])
+        .arg(&file)
+        .arg(&gif)
+        .args(["--size", "30x30"]));
+    assert!(out.status.success(), "{out:?}");
 }
 
 /// Nonsense numbers are usage errors (exit 2), not a silent one-sample file or exit 1.

@@ -257,3 +257,45 @@ fn render_thumbnail_equals_a_one_shot_thumbnail() {
         }
     }
 }
+
+/// A push decoder that decodes only the levels before a thumbnail's samples
+/// (`ParserOptions::decode_before`) draws the same thumbnails as one that decodes them all, at
+/// every cut, while decoding no level past them; it takes a file with more samples than its
+/// limit, and is complete once every level is verified.
+#[test]
+fn a_decoder_capped_at_a_thumbnails_samples_draws_the_same_thumbnails() {
+    let bytes = file();
+    let n = qcs::container::inspect(&bytes)
+        .header
+        .expect("header")
+        .total_samples;
+    let (w, h) = (2, 2);
+    let cap = qcs::thumbnail_samples(w, h);
+    assert!(cap < n / 4);
+    let mut limits = Limits::default();
+    limits.max_samples = cap; // the levels before `cap` end at it: 8, 16, 32, 64
+    let opts = ParserOptions::with_limits(limits.clone());
+    assert!(StreamDecoder::with_options(opts.clone())
+        .push(&bytes)
+        .is_err());
+    let mut capped = StreamDecoder::with_options(opts.decode_before(cap));
+    let mut whole = StreamDecoder::new(Limits::default());
+    for piece in bytes.chunks(7) {
+        capped.push(piece).expect("push");
+        whole.push(piece).expect("push");
+        assert!(capped.samples_available() <= cap);
+        assert_eq!(capped.is_complete(), whole.is_complete());
+        if capped.header().is_none() {
+            continue;
+        }
+        for method in [Method::Gouraud, Method::Shepard] {
+            let a = capped.render_thumbnail(method, w, h).expect("render");
+            let b = whole.render_thumbnail(method, w, h).expect("render");
+            assert_eq!(a.decoded().samples_used, b.decoded().samples_used);
+            assert!(a.decoded().image == b.decoded().image);
+        }
+    }
+    assert!(capped.is_complete());
+    assert_eq!(capped.samples_available(), cap);
+    assert_eq!(capped.levels_complete(), whole.levels_complete());
+}

@@ -381,6 +381,27 @@ fn output_size(size: Option<(u32, u32)>, scale: Option<f64>, w: u32, h: u32) -> 
     ))
 }
 
+/// The file's header, as `qcs::decode` reports a file that has none: it sets the default
+/// output size before the decode, which checks it against the limits.
+fn header(bytes: &[u8]) -> qcs::Result<qcs::container::Header> {
+    match qcs::container::Header::parse(bytes) {
+        Ok((h, _)) => Ok(h),
+        Err(qcs::container::FormatError::TruncatedHeader { .. }) => Err(qcs::Error::NeedMoreData),
+        Err(e) => Err(qcs::Error::Format(e)),
+    }
+}
+
+/// A stream decoder for pictures of `size`: one that decodes only the samples a thumbnail of
+/// that size draws on when `thumbnail` (so it also takes a file with more samples than the
+/// limits allow, if its first levels fit).
+fn stream_decoder(size: (u32, u32), thumbnail: bool, recover: bool) -> StreamDecoder {
+    let opts = qcs::container::ParserOptions::with_limits(qcs::Limits::default()).recover(recover);
+    StreamDecoder::with_options(match thumbnail {
+        true => opts.decode_before(qcs::thumbnail_samples(size.0, size.1)),
+        false => opts,
+    })
+}
+
 fn read(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
 }
@@ -399,15 +420,7 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
     };
     // An output the image crate cannot write is refused before the decode.
     super::output_format(out)?;
-    // The header's size is the default output size; the decode checks it against the limits
-    // (a thumbnail of a file with more samples than they allow is fine).
-    let header = match qcs::container::Header::parse(&bytes) {
-        Ok((h, _)) => h,
-        Err(qcs::container::FormatError::TruncatedHeader { .. }) => {
-            return Err(qcs::Error::NeedMoreData).with_context(ctx)
-        }
-        Err(e) => return Err(qcs::Error::Format(e)).with_context(ctx),
-    };
+    let header = header(&bytes).with_context(ctx)?;
     let size = output_size(a.size, a.scale, header.width, header.height);
     let opts = DecodeOptions {
         method: a.method.into(),
@@ -466,9 +479,9 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
 fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
     let bytes = &bytes[..a.bytes.unwrap_or(usize::MAX).min(bytes.len())];
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut dec = StreamDecoder::with_options(
-        qcs::container::ParserOptions::with_limits(qcs::Limits::default()).recover(a.recover),
-    );
+    let h = header(bytes)?;
+    let size = output_size(a.size, a.scale, h.width, h.height);
+    let mut dec = stream_decoder(size, !a.no_thumbnail, a.recover);
     let mut cuts: Vec<usize> = match a.every {
         Some(k) => (1..)
             .map(|i| i * k)
@@ -483,16 +496,20 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
     for cut in cuts {
         dec.push(&bytes[fed..cut])?;
         fed = cut;
-        let Some(h) = dec.header().cloned() else {
+        if dec.header().is_none() {
             continue;
-        };
-        let size = output_size(a.size, a.scale, h.width, h.height);
+        }
         // Thumbnails where the output would be one, as the picture `qcs decode` writes.
         let pic = match a.no_thumbnail {
             true => dec.render(a.method.into(), size.0, size.1)?,
             false => dec.render_thumbnail(a.method.into(), size.0, size.1)?,
         };
-        let kind = if pic.is_final() { "final" } else { "preview" };
+        // A thumbnail of the whole file is final too, though it draws on fewer samples.
+        let kind = if dec.is_complete() {
+            "final"
+        } else {
+            "preview"
+        };
         let path = dir.join(format!("frame-{n:03}-{cut:08}B-{kind}.png"));
         let d = pic.decoded();
         super::save_image_icc(&d.image, &path, d.icc.as_deref())?;
@@ -795,29 +812,27 @@ pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
     let mut gif_bytes = Vec::new();
     let mut gif = GifEncoder::new_with_speed(&mut gif_bytes, 10);
     gif.set_repeat(Repeat::Infinite)?;
-    let mut dec = StreamDecoder::new(qcs::Limits::default());
+    let h = header(&bytes).with_context(ctx)?;
+    let size = a.size.unwrap_or_else(|| {
+        let f = (512.0 / h.width as f64).min(1.0);
+        output_size(None, Some(f), h.width, h.height)
+    });
+    let mut dec = stream_decoder(size, true, false);
     let mut fed = 0;
     let mut frames = 0;
     for cut in cuts {
         dec.push(&bytes[fed..cut]).with_context(ctx)?;
         fed = cut;
-        let Some(h) = dec.header().cloned() else {
+        if dec.header().is_none() {
             continue;
-        };
-        let size = a.size.unwrap_or_else(|| {
-            let f = (512.0 / h.width as f64).min(1.0);
-            (
-                ((h.width as f64 * f).round() as u32).max(1),
-                ((h.height as f64 * f).round() as u32).max(1),
-            )
-        });
+        }
         // As `qcs decode` draws an output much smaller than the image.
         let pic = dec
             .render_thumbnail(Method::Gouraud, size.0, size.1)
             .with_context(ctx)?;
         let mut rgba = pic.decoded().image.to_rgba8();
         stamp(&mut rgba, &format!("{cut}B"));
-        let delay = if pic.is_final() {
+        let delay = if dec.is_complete() {
             a.delay_ms.saturating_mul(4)
         } else {
             a.delay_ms

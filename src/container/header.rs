@@ -255,6 +255,16 @@ impl Header {
         }
     }
 
+    /// The samples of the levels that start before sample `k`: what a decoder that stops at
+    /// `k` decodes (all N when `k` is in the last level).
+    pub(crate) fn samples_of_levels_before(&self, k: u64) -> u64 {
+        (0..self.level_count())
+            .map_while(|l| self.level_range(l))
+            .take_while(|r| r.start < k)
+            .last()
+            .map_or(0, |r| r.end)
+    }
+
     /// Number of levels: ⌈log2(N/L0)⌉ + 1 (1 when L0 ≥ N). Never more than 64.
     ///
     /// ```

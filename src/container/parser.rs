@@ -24,20 +24,45 @@ pub struct ParserOptions {
     /// On a format error after the header (CRC mismatch, bad chunk), stop with
     /// [`Event::Stopped`] and keep the longest verified prefix instead of failing.
     pub recover: bool,
+    /// The caller decodes only the levels that start before this sample (`None`: all): the
+    /// sample limit is checked against the samples of those levels, not the header's count.
+    pub decode_before: Option<u64>,
 }
 
 impl ParserOptions {
-    /// Options with the given limits, no recovery.
+    /// Options with the given limits, no recovery, every level decoded.
     pub fn with_limits(limits: Limits) -> Self {
         ParserOptions {
             limits,
             recover: false,
+            decode_before: None,
         }
     }
 
     /// These options with recovery switched on or off.
     pub fn recover(mut self, recover: bool) -> Self {
         self.recover = recover;
+        self
+    }
+
+    /// These options for a caller that decodes only the levels starting before sample `k`.
+    ///
+    /// ```
+    /// use qcs::container::{Coding, ContainerWriter, Header, Layout, Parser, ParserOptions};
+    /// // 10 000 samples in levels of 100, 100, 200, 400, …; a limit of 1000.
+    /// let h = Header::new(100, 100, Layout::Grey, 10_000, 100, Coding::Raw { bits: 1 });
+    /// let bytes = ContainerWriter::new(Vec::new(), &h)?.into_inner(); // the header alone
+    /// let mut limits = qcs::Limits::default();
+    /// limits.max_samples = 1000;
+    /// let push = |opts| Parser::new(opts).push(&bytes, &mut Vec::new()).map(|_| ());
+    /// assert!(push(ParserOptions::with_limits(limits.clone())).is_err());
+    /// // Samples 0..800 are in the levels that start before sample 500.
+    /// assert!(push(ParserOptions::with_limits(limits.clone()).decode_before(500)).is_ok());
+    /// assert!(push(ParserOptions::with_limits(limits).decode_before(801)).is_err());
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn decode_before(mut self, k: u64) -> Self {
+        self.decode_before = Some(k);
         self
     }
 }
@@ -534,9 +559,11 @@ impl Parser {
                 limits
                     .check_image(header.width as u64, header.height as u64)
                     .map_err(Fail::Limits)?;
-                limits
-                    .check_samples(header.total_samples)
-                    .map_err(Fail::Limits)?;
+                let decoded = match self.opts.decode_before {
+                    Some(k) => header.samples_of_levels_before(k),
+                    None => header.total_samples,
+                };
+                limits.check_samples(decoded).map_err(Fail::Limits)?;
                 self.level_count = header.level_count();
                 self.header = Some(header.clone());
                 events.push(Event::Header(header));
