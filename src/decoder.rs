@@ -94,8 +94,9 @@ pub struct StreamDecoder {
     set: Option<SampleSet>,
     stopped: Option<FormatError>,
     metadata: Vec<Metadata>,
-    /// Levels starting at or after this sample are parsed and verified but not decoded: a
-    /// one-shot decode capped at fewer samples does not pay for the rest.
+    /// Levels starting at or after this sample are parsed and verified but not decoded
+    /// ([`ParserOptions::decode_before`]): a decode capped at fewer samples does not pay for
+    /// the rest.
     decode_limit: u64,
     /// Whether the level being parsed is past `decode_limit`.
     skipping: bool,
