@@ -82,8 +82,9 @@ pub struct SourceImage<'a> {
     width: usize,
     height: usize,
     channels: usize,
-    /// (W+1)×(H+1)×C prefix sums.
-    sat: Vec<u64>,
+    /// (W+1)×(H+1)×C prefix sums modulo 2^32 (half the memory of exact ones; see
+    /// [`SourceImage::box_sum`]).
+    sat: Vec<u32>,
 }
 
 impl<'a> SourceImage<'a> {
@@ -103,14 +104,14 @@ impl<'a> SourceImage<'a> {
             )));
         }
         let stride = (w + 1) * c;
-        let mut sat = vec![0u64; (w + 1) * (h + 1) * c];
+        let mut sat = vec![0u32; (w + 1) * (h + 1) * c];
         for y in 0..h {
-            let mut row = vec![0u64; c];
+            let mut row = vec![0u32; c];
             for x in 0..w {
                 for k in 0..c {
-                    row[k] += pixels[(y * w + x) * c + k] as u64;
+                    row[k] = row[k].wrapping_add(pixels[(y * w + x) * c + k] as u32);
                     sat[(y + 1) * stride + (x + 1) * c + k] =
-                        sat[y * stride + (x + 1) * c + k] + row[k];
+                        sat[y * stride + (x + 1) * c + k].wrapping_add(row[k]);
                 }
             }
         }
@@ -123,14 +124,28 @@ impl<'a> SourceImage<'a> {
         })
     }
 
-    fn box_mean(&self, (x0, y0, x1, y1): (usize, usize, usize, usize), out: &mut Vec<u8>) {
-        let stride = (self.width + 1) * self.channels;
-        let n = ((x1 - x0) * (y1 - y0)) as u64;
+    fn box_mean(&self, b: (usize, usize, usize, usize), out: &mut Vec<u8>) {
+        let n = ((b.2 - b.0) * (b.3 - b.1)) as u64;
         for k in 0..self.channels {
-            let at = |x: usize, y: usize| self.sat[y * stride + x * self.channels + k];
-            let s = at(x1, y1) + at(x0, y0) - at(x0, y1) - at(x1, y0);
-            out.push(((s + n / 2) / n) as u8);
+            out.push(((self.box_sum(b, k) + n / 2) / n) as u8);
         }
+    }
+
+    /// The sum of channel `k` over the pixels `[x0, x1) × [y0, y1)`. The table's sums wrap
+    /// at 2^32, and their difference is the exact sum when that is below 2^32: a box of up to
+    /// 2^32 / 255 pixels. A larger one is summed in halves.
+    fn box_sum(&self, (x0, y0, x1, y1): (usize, usize, usize, usize), k: usize) -> u64 {
+        if ((x1 - x0) * (y1 - y0)) as u64 * 255 > u32::MAX as u64 {
+            // At most 65535 pixels wide, so a box one row high fits.
+            let ym = (y0 + y1) / 2;
+            return self.box_sum((x0, y0, x1, ym), k) + self.box_sum((x0, ym, x1, y1), k);
+        }
+        let stride = (self.width + 1) * self.channels;
+        let at = |x: usize, y: usize| self.sat[y * stride + x * self.channels + k];
+        let s = (at(x1, y1).wrapping_add(at(x0, y0)))
+            .wrapping_sub(at(x0, y1))
+            .wrapping_sub(at(x1, y0));
+        s as u64
     }
 
     fn pixel(&self, x: usize, y: usize, k: usize) -> u8 {
@@ -380,6 +395,40 @@ impl<'a> Fit<'a> {
 mod tests {
     use super::*;
     use crate::sites::Quasicrystal;
+
+    #[test]
+    fn box_sums_are_exact_though_the_table_wraps() {
+        // Small boxes of a noisy image against sums pixel by pixel.
+        let (w, h, c) = (37, 23, 3);
+        let px: Vec<u8> = (0..w * h * c).map(|i| (i * 97 % 251) as u8).collect();
+        let src = SourceImage::new(&px, w as u32, h as u32, c).unwrap();
+        for (x0, y0, x1, y1) in [
+            (0, 0, w, h),
+            (3, 4, 5, 20),
+            (36, 22, 37, 23),
+            (10, 0, 30, 1),
+        ] {
+            for k in 0..c {
+                let px = &px;
+                let direct: u64 = (y0..y1)
+                    .flat_map(|y| (x0..x1).map(move |x| px[(y * w + x) * c + k] as u64))
+                    .sum();
+                assert_eq!(src.box_sum((x0, y0, x1, y1), k), direct);
+            }
+        }
+        // A white image whose sum exceeds 2^32: 4200 × 4100 × 255 = 4.39·10^9.
+        let (w, h) = (4200, 4100);
+        let px = vec![255u8; w * h];
+        let src = SourceImage::new(&px, w as u32, h as u32, 1).unwrap();
+        assert_eq!(src.box_sum((0, 0, w, h), 0), 255 * (w * h) as u64);
+        assert_eq!(
+            src.box_sum((1, 2, w - 3, h - 1), 0),
+            255 * ((w - 4) * (h - 3)) as u64
+        );
+        let mut mean = Vec::new();
+        src.box_mean((0, 0, w, h), &mut mean);
+        assert_eq!(mean, [255]);
+    }
 
     #[test]
     fn a_large_image_is_fitted_at_its_block_means() {
