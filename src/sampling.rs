@@ -134,11 +134,10 @@ impl<'a> SourceImage<'a> {
     /// The sum of channel `k` over the pixels `[x0, x1) × [y0, y1)`. The table's sums wrap
     /// at 2^32, and their difference is the exact sum when that is below 2^32: a box of up to
     /// 2^32 / 255 pixels. A larger one is summed in halves.
+    #[inline]
     fn box_sum(&self, (x0, y0, x1, y1): (usize, usize, usize, usize), k: usize) -> u64 {
         if ((x1 - x0) * (y1 - y0)) as u64 * 255 > u32::MAX as u64 {
-            // At most 65535 pixels wide, so a box one row high fits.
-            let ym = (y0 + y1) / 2;
-            return self.box_sum((x0, y0, x1, ym), k) + self.box_sum((x0, ym, x1, y1), k);
+            return self.box_sum_halves((x0, y0, x1, y1), k);
         }
         let stride = (self.width + 1) * self.channels;
         let at = |x: usize, y: usize| self.sat[y * stride + x * self.channels + k];
@@ -146,6 +145,15 @@ impl<'a> SourceImage<'a> {
             .wrapping_sub(at(x0, y1))
             .wrapping_sub(at(x1, y0));
         s as u64
+    }
+
+    /// [`SourceImage::box_sum`] of a box too large for one lookup: its two halves of rows
+    /// (the image is at most 65535 pixels wide, so a box one row high takes one).
+    #[cold]
+    #[inline(never)]
+    fn box_sum_halves(&self, (x0, y0, x1, y1): (usize, usize, usize, usize), k: usize) -> u64 {
+        let ym = (y0 + y1) / 2;
+        self.box_sum((x0, y0, x1, ym), k) + self.box_sum((x0, ym, x1, y1), k)
     }
 
     fn pixel(&self, x: usize, y: usize, k: usize) -> u8 {
