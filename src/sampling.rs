@@ -147,13 +147,18 @@ impl<'a> SourceImage<'a> {
         s as u64
     }
 
-    /// [`SourceImage::box_sum`] of a box too large for one lookup: its two halves of rows
-    /// (the image is at most 65535 pixels wide, so a box one row high takes one).
+    /// [`SourceImage::box_sum`] of a box too large for one lookup: the sum of its halves, split
+    /// across its longer side.
     #[cold]
     #[inline(never)]
     fn box_sum_halves(&self, (x0, y0, x1, y1): (usize, usize, usize, usize), k: usize) -> u64 {
-        let ym = (y0 + y1) / 2;
-        self.box_sum((x0, y0, x1, ym), k) + self.box_sum((x0, ym, x1, y1), k)
+        if y1 - y0 >= x1 - x0 {
+            let ym = (y0 + y1) / 2;
+            self.box_sum((x0, y0, x1, ym), k) + self.box_sum((x0, ym, x1, y1), k)
+        } else {
+            let xm = (x0 + x1) / 2;
+            self.box_sum((x0, y0, xm, y1), k) + self.box_sum((xm, y0, x1, y1), k)
+        }
     }
 
     fn pixel(&self, x: usize, y: usize, k: usize) -> u8 {
@@ -424,8 +429,8 @@ mod tests {
                 assert_eq!(src.box_sum((x0, y0, x1, y1), k), direct);
             }
         }
-        // A white image whose sum exceeds 2^32: 4200 × 4100 × 255 = 4.39·10^9.
-        let (w, h) = (4200, 4100);
+        // A white image whose sum exceeds 2^32: 4200 × 4200 × 255 = 4.50·10^9.
+        let (w, h) = (4200, 4200);
         let px = vec![255u8; w * h];
         let src = SourceImage::new(&px, w as u32, h as u32, 1).unwrap();
         assert_eq!(src.box_sum((0, 0, w, h), 0), 255 * (w * h) as u64);
@@ -436,6 +441,8 @@ mod tests {
         let mut mean = Vec::new();
         src.box_mean((0, 0, w, h), &mut mean);
         assert_eq!(mean, [255]);
+        // Wider than tall: split across its columns (the square ones across their rows).
+        assert_eq!(src.box_sum((0, 0, w, 4100), 0), 255 * (w * 4100) as u64);
     }
 
     #[test]
