@@ -309,6 +309,14 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
                 ok += 1;
                 bin += e.input;
                 bout += e.output;
+                if e.capped_from.is_some() && !quiet {
+                    eprintln!(
+                        "qcs: {}: {} samples, fewer than the density's: the most `qcs decode` \
+                         takes by default",
+                        p.display(),
+                        qcs::Limits::default().max_samples
+                    );
+                }
             }
             Err(e) => {
                 eprintln!("qcs: {}: {e:#}", p.display());
