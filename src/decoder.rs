@@ -747,12 +747,8 @@ fn push_whole(
         .max()
         .unwrap_or(0)
         .min(h.total_samples);
-    // The levels beyond the one that holds sample `max_samples` are only verified.
-    let needed = (found.levels.iter())
-        .map(|l| l.samples.end)
-        .find(|&end| end >= max_samples)
-        .unwrap_or(u64::MAX);
-    let present = present.min(needed) as usize;
+    // The levels that start at or after `max_samples` are only verified (`decode_before`).
+    let present = present.min(h.samples_of_levels_before(max_samples)) as usize;
     // The levels' colours need their sites' positions, the cells the sites.
     dec.sites = Arc::new(seq.first(present));
     if !build_cells {

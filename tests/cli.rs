@@ -129,6 +129,13 @@ fn rocket_qcs(name: &str) -> PathBuf {
     file
 }
 
+/// The last picture `qcs decode --frames` wrote into `dir` (their names sort in order).
+fn last_frame(dir: &std::path::Path) -> PathBuf {
+    let frames = std::fs::read_dir(dir).expect("frames");
+    let paths = frames.map(|e| e.expect("entry").path());
+    paths.max().expect("a frame")
+}
+
 /// An output much smaller than the image is a thumbnail (`DecodeOptions::thumbnail`), and
 /// says so; `--no-thumbnail` renders every sample at its pixel centres.
 #[test]
@@ -173,14 +180,9 @@ fn small_outputs_are_thumbnails() {
             cmd.arg("--no-thumbnail");
         }
         assert!(run(&mut cmd).status.success());
-        let mut frames: Vec<_> = std::fs::read_dir(&dir)
-            .expect("frames")
-            .map(|e| e.expect("entry").path())
-            .collect();
-        frames.sort();
-        let last = frames.last().expect("a frame");
+        let last = last_frame(&dir);
         assert!(
-            image::open(last).expect("a PNG").to_rgb8() == want,
+            image::open(&last).expect("a PNG").to_rgb8() == want,
             "{last:?}"
         );
     }
@@ -276,14 +278,9 @@ fn files_beyond_the_sample_limit_decode_as_thumbnails() {
         .arg(&dir)
         .args(["--size", "30x30"]));
     assert!(out.status.success(), "{out:?}");
-    let mut frames: Vec<_> = std::fs::read_dir(&dir)
-        .expect("frames")
-        .map(|e| e.expect("entry").path())
-        .collect();
-    frames.sort();
-    let last = frames.last().expect("a frame");
+    let last = last_frame(&dir);
     assert!(last.to_string_lossy().ends_with("-final.png"), "{last:?}");
-    assert!(image::open(last).expect("a PNG").to_luma8() == thumb);
+    assert!(image::open(&last).expect("a PNG").to_luma8() == thumb);
     let gif = scratch("over-limit.gif");
     let out = run(qcs()
         .args(["-q", "preview"])

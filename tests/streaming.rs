@@ -19,6 +19,12 @@ fn file() -> Vec<u8> {
     encode(&gradient(), &opts).expect("encode")
 }
 
+/// The file's sample count N.
+fn samples(bytes: &[u8]) -> u64 {
+    let header = qcs::container::inspect(bytes).header;
+    header.expect("header").total_samples
+}
+
 /// A reader that returns at most 10 bytes per call, as sockets and pipes may.
 struct Trickle<'a>(&'a [u8]);
 
@@ -198,10 +204,7 @@ fn invalid_payloads_decode_alike_in_pieces() {
 #[test]
 fn render_first_equals_a_capped_decode() {
     let bytes = file();
-    let total = qcs::container::inspect(&bytes)
-        .header
-        .expect("header")
-        .total_samples;
+    let total = samples(&bytes);
     let mut dec = StreamDecoder::new(Limits::default());
     let mut fed = 0;
     for cut in [40, bytes.len() / 3, bytes.len()] {
@@ -265,10 +268,7 @@ fn render_thumbnail_equals_a_one_shot_thumbnail() {
 #[test]
 fn a_decoder_capped_at_a_thumbnails_samples_draws_the_same_thumbnails() {
     let bytes = file();
-    let n = qcs::container::inspect(&bytes)
-        .header
-        .expect("header")
-        .total_samples;
+    let n = samples(&bytes);
     let (w, h) = (2, 2);
     let cap = qcs::thumbnail_samples(w, h);
     assert!(cap < n / 4);
