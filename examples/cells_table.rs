@@ -1,17 +1,20 @@
 //! Canonical Delaunay cells (issue #11): cell statistics, Gouraud PSNR of the centroid rule
-//! against `spade`'s own split, and monotone sharpening.
+//! against `spade`'s own split, monotone sharpening, and a census of the local configurations
+//! (the premise of a triangulation that would look them up rather than compute them, #4).
 //!
-//! Run: `cargo run --release --example cells_table -- [stats] [psnr] [monotone] [DIR]`
-//! (default: all three parts on `../shared/corpus/dev`, or `/work/shared/corpus/dev`).
+//! Run: `cargo run --release --example cells_table -- [stats] [psnr] [monotone] [atlas] [DIR]`
+//! (default: all four parts on `../shared/corpus/dev`, or `/work/shared/corpus/dev`).
 //!
 //! Sites: the quasicrystal sequence in the default frame; sample colour: area mean
 //! (`SampleColour::Area`) for a file of exactly N samples; picture rendered at source size.
 //! "spade" pushes the same samples without exact lattice points, so the triangulation's own
 //! split of cocircular cells is drawn.
 
+use std::collections::{BTreeSet, HashMap, HashSet};
 use std::path::PathBuf;
 use std::time::Instant;
 
+use qcs::lattice::ZZeta;
 use qcs::reconstruction::{Method, SampleSet};
 use qcs::sampling::{SampleColour, SourceImage};
 use qcs::sites::Quasicrystal;
@@ -140,6 +143,97 @@ fn stats() {
     println!();
 }
 
+/// A vertex star: the cells around a site, each as lattice vectors from it.
+type Star = Vec<Vec<[i64; 4]>>;
+
+/// The lattice vector from `a` to `b`.
+fn diff(a: ZZeta, b: ZZeta) -> [i64; 4] {
+    std::array::from_fn(|k| b.0[k] - a.0[k])
+}
+
+/// Census of vertex stars: for every site at least 8 spacings from the picture's edges, the
+/// cells around it as lattice vectors from it (each cell's cycle starting at the site). Counts
+/// the distinct stars, the distinct vectors in them, and the distinct existence patterns of
+/// those vectors around a site (which of `x + v` are sites), and checks that the pattern
+/// decides the star: then a table from pattern to star would triangulate the interior by
+/// look-up, exactly.
+fn atlas() {
+    println!("## Vertex stars of the canonical cells, default frame\n");
+    println!("| picture | sites | interior sites | stars | vectors | patterns | ambiguous | cells time |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for (w, h, n) in [
+        (768u32, 480u32, 23040usize),
+        (768, 480, 50000),
+        (768, 480, 92160),
+        (1024, 1024, 16384),
+        (1024, 1024, 65536),
+        (1024, 1024, 262144),
+    ] {
+        let mut set = SampleSet::new(w, h, 1);
+        for s in Quasicrystal::new(w, h).expect("frame").first(n) {
+            set.push_exact(s.pos, s.lattice, &[0]);
+        }
+        let t0 = Instant::now();
+        let cells = set.cells().expect("exact").clone();
+        let dt = t0.elapsed();
+        let (pos, lat) = (set.points(), set.point_lattice());
+        let sites: HashSet<[i64; 4]> = lat.iter().flatten().map(|z| z.0).collect();
+        let mut around = vec![Vec::new(); pos.len()];
+        for (k, c) in cells.iter().enumerate() {
+            for &v in c {
+                around[v as usize].push(k);
+            }
+        }
+        let cells: Vec<&[u32]> = cells.iter().collect();
+        let m = 8.0 * ((w * h) as f64 / n as f64).sqrt();
+        let mut stars = Vec::new();
+        for (p, q) in pos.iter().enumerate() {
+            let inner = q[0] >= m && q[1] >= m && q[0] <= w as f64 - m && q[1] <= h as f64 - m;
+            let (true, Some(x)) = (inner, lat[p]) else {
+                continue;
+            };
+            let mut star: Star = (around[p].iter())
+                .map(|&k| {
+                    let mut c: Vec<_> = cells[k]
+                        .iter()
+                        .map(|&v| diff(x, lat[v as usize].expect("exact")))
+                        .collect();
+                    let at = c
+                        .iter()
+                        .position(|v| *v == [0; 4])
+                        .expect("the site is a vertex");
+                    c.rotate_left(at);
+                    c
+                })
+                .collect();
+            star.sort();
+            stars.push((x, star));
+        }
+        let vectors: BTreeSet<[i64; 4]> = (stars.iter().flat_map(|s| s.1.iter().flatten()))
+            .filter(|v| **v != [0; 4])
+            .copied()
+            .collect();
+        let mut by_pattern: HashMap<Vec<bool>, HashSet<&Star>> = HashMap::new();
+        for (x, star) in &stars {
+            let pattern = (vectors.iter())
+                .map(|v| sites.contains(&std::array::from_fn(|k| x.0[k] + v[k])))
+                .collect();
+            by_pattern.entry(pattern).or_default().insert(star);
+        }
+        let distinct: HashSet<_> = stars.iter().map(|s| &s.1).collect();
+        let ambiguous = by_pattern.values().filter(|s| s.len() > 1).count();
+        println!(
+            "| {w}×{h} | {n} | {} | {} | {} | {} | {ambiguous} | {:.1} ms |",
+            stars.len(),
+            distinct.len(),
+            vectors.len(),
+            by_pattern.len(),
+            dt.as_secs_f64() * 1e3
+        );
+    }
+    println!();
+}
+
 fn table(list: &[Photo]) {
     println!("## Gouraud PSNR (dB): canonical cells / spade split / gain\n");
     println!("| photo | 1089 | 4225 | 16641 |");
@@ -232,6 +326,9 @@ fn main() {
     let want = |s: &str| args.iter().all(|a| a.contains('/')) || args.iter().any(|a| a == s);
     if want("stats") {
         stats();
+    }
+    if want("atlas") {
+        atlas();
     }
     if want("psnr") || want("monotone") {
         let list = photos(&dir);
