@@ -17,7 +17,7 @@ use std::time::Instant;
 use qcs::lattice::ZZeta;
 use qcs::reconstruction::{Method, SampleSet};
 use qcs::sampling::{SampleColour, SourceImage};
-use qcs::sites::Quasicrystal;
+use qcs::sites::{site_order, Quasicrystal};
 
 fn psnr(a: &[u8], b: &[u8]) -> f64 {
     let se: f64 = a
@@ -151,87 +151,256 @@ fn diff(a: ZZeta, b: ZZeta) -> [i64; 4] {
     std::array::from_fn(|k| b.0[k] - a.0[k])
 }
 
-/// Census of vertex stars: for every site at least 8 spacings from the picture's edges, the
-/// cells around it as lattice vectors from it (each cell's cycle starting at the site). Counts
-/// the distinct stars, the distinct vectors in them, and the distinct existence patterns of
-/// those vectors around a site (which of `x + v` are sites), and checks that the pattern
-/// decides the star: then a table from pattern to star would triangulate the interior by
-/// look-up, exactly.
+/// The vertex stars of the canonical cells of the first `n` sites of a `w × h` picture, for
+/// every site at least 8 spacings from the picture's edges: the cells around the site as
+/// lattice vectors from it (each cell's cycle starting at the site), sorted.
+struct Census {
+    set: SampleSet,
+    /// (point, its lattice point, its star).
+    stars: Vec<(usize, ZZeta, Star)>,
+    cells_time: f64,
+}
+
+fn census(w: u32, h: u32, n: usize) -> Census {
+    let mut set = SampleSet::new(w, h, 1);
+    for s in Quasicrystal::new(w, h).expect("frame").first(n) {
+        set.push_exact(s.pos, s.lattice, &[0]);
+    }
+    let t0 = Instant::now();
+    let cells = set.cells().expect("exact").clone();
+    let cells_time = t0.elapsed().as_secs_f64() * 1e3;
+    let (pos, lat) = (set.points(), set.point_lattice());
+    let mut around = vec![Vec::new(); pos.len()];
+    for (k, c) in cells.iter().enumerate() {
+        for &v in c {
+            around[v as usize].push(k);
+        }
+    }
+    let cells: Vec<&[u32]> = cells.iter().collect();
+    let m = 8.0 * ((w * h) as f64 / n as f64).sqrt();
+    let mut stars = Vec::new();
+    for (p, q) in pos.iter().enumerate() {
+        let inner = q[0] >= m && q[1] >= m && q[0] <= w as f64 - m && q[1] <= h as f64 - m;
+        let (true, Some(x)) = (inner, lat[p]) else {
+            continue;
+        };
+        let mut star: Star = (around[p].iter())
+            .map(|&k| {
+                let mut c: Vec<_> = (cells[k].iter())
+                    .map(|&v| diff(x, lat[v as usize].expect("exact")))
+                    .collect();
+                let at = (c.iter().position(|v| *v == [0; 4])).expect("the site is a vertex");
+                c.rotate_left(at);
+                c
+            })
+            .collect();
+        star.sort();
+        stars.push((p, x, star));
+    }
+    Census {
+        set,
+        stars,
+        cells_time,
+    }
+}
+
+impl Census {
+    /// Every vector of a star.
+    fn vectors(&self) -> Vec<[i64; 4]> {
+        let all: BTreeSet<[i64; 4]> = (self.stars.iter().flat_map(|s| s.2.iter().flatten()))
+            .filter(|v| **v != [0; 4])
+            .copied()
+            .collect();
+        all.into_iter().collect()
+    }
+}
+
+/// The points of a picture by pixel (inside the picture only), to find a lattice point by
+/// its position.
+struct ByPixel {
+    w: usize,
+    start: Vec<u32>,
+    /// Point indices and their lattice points, pixel by pixel.
+    ids: Vec<u32>,
+    zs: Vec<[i64; 4]>,
+}
+
+impl ByPixel {
+    fn new(pos: &[[f64; 2]], lat: &[Option<ZZeta>], w: u32, h: u32) -> Self {
+        let (w, h) = (w as usize, h as usize);
+        let pixel = |p: [f64; 2]| {
+            let inside = p[0] >= 0.0 && p[1] >= 0.0 && p[0] < w as f64 && p[1] < h as f64;
+            inside.then(|| p[1] as usize * w + p[0] as usize)
+        };
+        let mut start = vec![0u32; w * h + 1];
+        for &p in pos {
+            if let Some(c) = pixel(p) {
+                start[c + 1] += 1;
+            }
+        }
+        for c in 0..w * h {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut ids = vec![0u32; start[w * h] as usize];
+        let mut zs = vec![[0i64; 4]; ids.len()];
+        for (k, &p) in pos.iter().enumerate() {
+            if let (Some(c), Some(z)) = (pixel(p), lat[k]) {
+                ids[fill[c] as usize] = k as u32;
+                zs[fill[c] as usize] = z.0;
+                fill[c] += 1;
+            }
+        }
+        ByPixel { w, start, ids, zs }
+    }
+
+    /// The point at lattice point `z`, looked for in the pixel of position `p` (inside the
+    /// picture): a point within rounding of a pixel's side could be missed, which the
+    /// caller's count of neighbours found would show.
+    fn find(&self, p: [f64; 2], z: [i64; 4]) -> Option<u32> {
+        let c = p[1] as usize * self.w + p[0] as usize;
+        let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
+        (a..b).find(|&k| self.zs[k] == z).map(|k| self.ids[k])
+    }
+}
+
+/// Census of vertex stars (see [`census`]): counts the distinct stars, the distinct vectors in
+/// them, and the distinct existence patterns of those vectors around a site (which of `x + v`
+/// are sites), and checks that the pattern decides the star: then a table from pattern to
+/// star would triangulate the interior by look-up, exactly. Then such a table, taken from one
+/// picture, is applied to another of the same density, and the look-up timed.
 fn atlas() {
     println!("## Vertex stars of the canonical cells, default frame\n");
     println!("| picture | sites | interior sites | stars | vectors | patterns | ambiguous | cells time |");
     println!("|---|---|---|---|---|---|---|---|");
-    for (w, h, n) in [
+    let sizes = [
         (768u32, 480u32, 23040usize),
         (768, 480, 50000),
         (768, 480, 92160),
         (1024, 1024, 16384),
         (1024, 1024, 65536),
         (1024, 1024, 262144),
-    ] {
-        let mut set = SampleSet::new(w, h, 1);
-        for s in Quasicrystal::new(w, h).expect("frame").first(n) {
-            set.push_exact(s.pos, s.lattice, &[0]);
-        }
-        let t0 = Instant::now();
-        let cells = set.cells().expect("exact").clone();
-        let dt = t0.elapsed();
-        let (pos, lat) = (set.points(), set.point_lattice());
+    ];
+    for (w, h, n) in sizes {
+        let c = census(w, h, n);
+        let vectors = c.vectors();
+        let lat = c.set.point_lattice();
         let sites: HashSet<[i64; 4]> = lat.iter().flatten().map(|z| z.0).collect();
-        let mut around = vec![Vec::new(); pos.len()];
-        for (k, c) in cells.iter().enumerate() {
-            for &v in c {
-                around[v as usize].push(k);
-            }
-        }
-        let cells: Vec<&[u32]> = cells.iter().collect();
-        let m = 8.0 * ((w * h) as f64 / n as f64).sqrt();
-        let mut stars = Vec::new();
-        for (p, q) in pos.iter().enumerate() {
-            let inner = q[0] >= m && q[1] >= m && q[0] <= w as f64 - m && q[1] <= h as f64 - m;
-            let (true, Some(x)) = (inner, lat[p]) else {
-                continue;
-            };
-            let mut star: Star = (around[p].iter())
-                .map(|&k| {
-                    let mut c: Vec<_> = cells[k]
-                        .iter()
-                        .map(|&v| diff(x, lat[v as usize].expect("exact")))
-                        .collect();
-                    let at = c
-                        .iter()
-                        .position(|v| *v == [0; 4])
-                        .expect("the site is a vertex");
-                    c.rotate_left(at);
-                    c
-                })
-                .collect();
-            star.sort();
-            stars.push((x, star));
-        }
-        let vectors: BTreeSet<[i64; 4]> = (stars.iter().flat_map(|s| s.1.iter().flatten()))
-            .filter(|v| **v != [0; 4])
-            .copied()
-            .collect();
         let mut by_pattern: HashMap<Vec<bool>, HashSet<&Star>> = HashMap::new();
-        for (x, star) in &stars {
+        for (_, x, star) in &c.stars {
             let pattern = (vectors.iter())
                 .map(|v| sites.contains(&std::array::from_fn(|k| x.0[k] + v[k])))
                 .collect();
             by_pattern.entry(pattern).or_default().insert(star);
         }
-        let distinct: HashSet<_> = stars.iter().map(|s| &s.1).collect();
+        let distinct: HashSet<_> = c.stars.iter().map(|s| &s.2).collect();
         let ambiguous = by_pattern.values().filter(|s| s.len() > 1).count();
         println!(
             "| {w}×{h} | {n} | {} | {} | {} | {} | {ambiguous} | {:.1} ms |",
-            stars.len(),
+            c.stars.len(),
             distinct.len(),
             vectors.len(),
             by_pattern.len(),
-            dt.as_secs_f64() * 1e3
+            c.cells_time
         );
     }
     println!();
+    // A table from 768×480 at 1 site per 4 px², applied to 1024×1024 at the same density.
+    let from = census(768, 480, 92160);
+    let vectors = from.vectors();
+    assert!(vectors.len() <= 64, "a pattern fits a u64");
+    let (pos, lat) = (from.set.points(), from.set.point_lattice());
+    let index = ByPixel::new(pos, lat, 768, 480);
+    let pattern = |x: [i64; 4], p: [f64; 2], pos_v: &[[f64; 2]], index: &ByPixel| {
+        let mut bits = 0u64;
+        for (k, (v, d)) in vectors.iter().zip(pos_v).enumerate() {
+            let z = std::array::from_fn(|i| x[i] + v[i]);
+            bits |= u64::from(index.find([p[0] + d[0], p[1] + d[1]], z).is_some()) << k;
+        }
+        bits
+    };
+    let pos_v: Vec<[f64; 2]> = (vectors.iter())
+        .map(|v| {
+            let (x, y) = ZZeta(*v).to_f64();
+            [x, y]
+        })
+        .collect();
+    // Each star with the vectors (indices into `vectors`) to its neighbours.
+    let table: HashMap<u64, (&Star, Vec<usize>)> = (from.stars.iter())
+        .map(|(p, x, star)| {
+            let around: BTreeSet<&[i64; 4]> = star.iter().flatten().collect();
+            let verts = (vectors.iter().enumerate())
+                .filter(|(_, v)| around.contains(v))
+                .map(|(k, _)| k)
+                .collect();
+            (pattern(x.0, pos[*p], &pos_v, &index), (star, verts))
+        })
+        .collect();
+    let to = census(1024, 1024, 262144);
+    let (pos, lat) = (to.set.points(), to.set.point_lattice());
+    let mut star_of = vec![None; pos.len()];
+    for (p, _, star) in &to.stars {
+        star_of[*p] = Some(star);
+    }
+    // Timed: what a look-up triangulation would do for the interior, site by site in pixel
+    // order (neighbouring sites read neighbouring memory): which of x + v are sites, from
+    // the star map (x + v is a site when it is not after the last site in the site order:
+    // decided by |(x + v)*|² in f64, exactly near the last site's), the star from the table,
+    // and the star's neighbours' point indices.
+    let qc = Quasicrystal::new(1024, 1024).expect("frame");
+    let last = qc.first(262144).last().expect("sites").lattice;
+    let norm = |(a, b): (f64, f64)| a * a + b * b;
+    let r2 = norm(last.star().to_f64());
+    let (below, above) = (r2 * (1.0 - 1e-9), r2 * (1.0 + 1e-9));
+    let star_v: Vec<(f64, f64)> = vectors.iter().map(|v| ZZeta(*v).star().to_f64()).collect();
+    let t0 = Instant::now();
+    let index = ByPixel::new(pos, lat, 1024, 1024);
+    let mut found = Vec::with_capacity(to.stars.len());
+    let mut neighbours = 0usize;
+    for (&p, &x) in index.ids.iter().zip(&index.zs) {
+        if star_of[p as usize].is_none() {
+            continue;
+        }
+        let (sx, sy) = ZZeta(x).star().to_f64();
+        let mut bits = 0u64;
+        for (k, (vx, vy)) in star_v.iter().enumerate() {
+            let d = norm((sx + vx, sy + vy));
+            let site = d < below
+                || (d <= above && {
+                    let z = ZZeta(std::array::from_fn(|i| x[i] + vectors[k][i]));
+                    site_order(z, last).is_le()
+                });
+            bits |= u64::from(site) << k;
+        }
+        let entry = table.get(&bits);
+        if let Some((_, verts)) = entry {
+            let q = pos[p as usize];
+            for &k in verts {
+                let z = std::array::from_fn(|i| x[i] + vectors[k][i]);
+                let at = [q[0] + pos_v[k][0], q[1] + pos_v[k][1]];
+                neighbours += usize::from(index.find(at, z).is_some());
+            }
+        }
+        found.push((p, entry.map(|e| e.0)));
+    }
+    let dt = t0.elapsed().as_secs_f64() * 1e3;
+    let same = (found.iter())
+        .filter(|(p, f)| f.is_some_and(|f| Some(f) == star_of[*p as usize]))
+        .count();
+    let missing = found.iter().filter(|f| f.1.is_none()).count();
+    let expected: usize = (found.iter().flat_map(|f| f.1))
+        .map(|s| s.iter().flatten().collect::<BTreeSet<_>>().len() - 1)
+        .sum();
+    assert_eq!(neighbours, expected, "every neighbour found by position");
+    println!(
+        "A table of {} patterns from 768×480 (92160 sites) looks up the stars of the {} interior \
+         sites of 1024×1024 (262144 sites) in {dt:.1} ms (cells: {:.1} ms): {same} the same, \
+         {missing} not in the table, {} different.\n",
+        table.len(),
+        to.stars.len(),
+        to.cells_time,
+        to.stars.len() - same - missing
+    );
 }
 
 fn table(list: &[Photo]) {
