@@ -220,8 +220,9 @@ impl Census {
 struct ByPixel {
     w: usize,
     start: Vec<u32>,
-    /// Point indices and their lattice points, pixel by pixel.
+    /// Point indices, their positions and lattice points, pixel by pixel.
     ids: Vec<u32>,
+    ps: Vec<[f64; 2]>,
     zs: Vec<[i64; 4]>,
 }
 
@@ -243,15 +244,22 @@ impl ByPixel {
         }
         let mut fill = start.clone();
         let mut ids = vec![0u32; start[w * h] as usize];
+        let mut ps = vec![[0.0; 2]; ids.len()];
         let mut zs = vec![[0i64; 4]; ids.len()];
         for (k, &p) in pos.iter().enumerate() {
             if let (Some(c), Some(z)) = (pixel(p), lat[k]) {
-                ids[fill[c] as usize] = k as u32;
-                zs[fill[c] as usize] = z.0;
+                let o = fill[c] as usize;
+                (ids[o], ps[o], zs[o]) = (k as u32, p, z.0);
                 fill[c] += 1;
             }
         }
-        ByPixel { w, start, ids, zs }
+        ByPixel {
+            w,
+            start,
+            ids,
+            ps,
+            zs,
+        }
     }
 
     /// The point at lattice point `z`, looked for in the pixel of position `p` (inside the
@@ -355,10 +363,12 @@ fn atlas() {
     let star_v: Vec<(f64, f64)> = vectors.iter().map(|v| ZZeta(*v).star().to_f64()).collect();
     let t0 = Instant::now();
     let index = ByPixel::new(pos, lat, 1024, 1024);
+    // The census's interior: 8 spacings (2 px) from the edges.
+    let m = 16.0;
     let mut found = Vec::with_capacity(to.stars.len());
     let mut neighbours = 0usize;
-    for (&p, &x) in index.ids.iter().zip(&index.zs) {
-        if star_of[p as usize].is_none() {
+    for ((&p, &q), &x) in index.ids.iter().zip(&index.ps).zip(&index.zs) {
+        if q[0] < m || q[1] < m || q[0] > 1024.0 - m || q[1] > 1024.0 - m {
             continue;
         }
         let (sx, sy) = ZZeta(x).star().to_f64();
@@ -374,7 +384,6 @@ fn atlas() {
         }
         let entry = table.get(&bits);
         if let Some((_, verts)) = entry {
-            let q = pos[p as usize];
             for &k in verts {
                 let z = std::array::from_fn(|i| x[i] + vectors[k][i]);
                 let at = [q[0] + pos_v[k][0], q[1] + pos_v[k][1]];
