@@ -204,7 +204,58 @@ fn census(w: u32, h: u32, n: usize) -> Census {
     }
 }
 
+/// Radius of the circle through three points.
+fn circumradius(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+    let (ab, bc, ca) = (d(a, b), d(b, c), d(c, a));
+    let area2 = ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs();
+    ab * bc * ca / (2.0 * area2)
+}
+
 impl Census {
+    /// D, twice the largest circumradius of a cell around an interior site; how many lattice
+    /// vectors lead from an interior site to a point within D; how many distinct sets of them
+    /// there are around interior sites; and how many such sets have two stars.
+    fn within(&self) -> (f64, usize, usize, usize) {
+        let px = |v: &[i64; 4]| {
+            let (x, y) = ZZeta(*v).to_f64();
+            [x, y]
+        };
+        let rho = (self.stars.iter().flat_map(|s| s.2.iter()))
+            .map(|c| circumradius(px(&c[0]), px(&c[1]), px(&c[2])))
+            .fold(0.0, f64::max);
+        let d = 2.0 * rho * (1.0 + 1e-9);
+        let (pos, lat) = (self.set.points(), self.set.point_lattice());
+        let mut grid: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        let cell = |p: [f64; 2]| ((p[0] / d).floor() as i64, (p[1] / d).floor() as i64);
+        for (k, p) in pos.iter().enumerate() {
+            if lat[k].is_some() {
+                grid.entry(cell(*p)).or_default().push(k);
+            }
+        }
+        let mut vectors = BTreeSet::new();
+        let mut by_set: HashMap<Vec<[i64; 4]>, HashSet<&Star>> = HashMap::new();
+        for (p, x, star) in &self.stars {
+            let (q, (cx, cy)) = (pos[*p], cell(pos[*p]));
+            let mut near = Vec::new();
+            for (gx, gy) in
+                (cx - 1..=cx + 1).flat_map(|gx| (cy - 1..=cy + 1).map(move |gy| (gx, gy)))
+            {
+                for &k in grid.get(&(gx, gy)).into_iter().flatten() {
+                    let r = pos[k];
+                    if k != *p && (r[0] - q[0]).hypot(r[1] - q[1]) <= d {
+                        near.push(diff(*x, lat[k].expect("kept")));
+                    }
+                }
+            }
+            near.sort();
+            vectors.extend(near.iter().copied());
+            by_set.entry(near).or_default().insert(star);
+        }
+        let ambiguous = by_set.values().filter(|s| s.len() > 1).count();
+        (d, vectors.len(), by_set.len(), ambiguous)
+    }
+
     /// Every vector of a star.
     fn vectors(&self) -> Vec<[i64; 4]> {
         let all: BTreeSet<[i64; 4]> = (self.stars.iter().flat_map(|s| s.2.iter().flatten()))
@@ -289,6 +340,7 @@ fn atlas() {
         (1024, 1024, 65536),
         (1024, 1024, 262144),
     ];
+    let mut within = Vec::new();
     for (w, h, n) in sizes {
         let c = census(w, h, n);
         let vectors = c.vectors();
@@ -310,6 +362,24 @@ fn atlas() {
             vectors.len(),
             by_pattern.len(),
             c.cells_time
+        );
+        within.push(c.within());
+    }
+    println!();
+    println!("The same stars keyed by every site within D = twice the largest circumradius of an");
+    println!(
+        "interior cell, which decides a star by construction (each cell's circle lies within D"
+    );
+    println!("of the site):\n");
+    println!(
+        "| picture | sites | D (px) | D / spacing | vectors within D | patterns | ambiguous |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for ((w, h, n), (d, vectors, patterns, ambiguous)) in sizes.iter().zip(within) {
+        let spacing = ((w * h) as f64 / *n as f64).sqrt();
+        println!(
+            "| {w}×{h} | {n} | {d:.2} | {:.2} | {vectors} | {patterns} | {ambiguous} |",
+            d / spacing
         );
     }
     println!();
