@@ -48,6 +48,68 @@ fn encode_info_decode() {
     assert_eq!((img.width(), img.height()), (97, 61));
 }
 
+/// Runs `cmd` with `input` on its standard input.
+fn piped(cmd: &mut Command, input: &[u8]) -> Output {
+    use std::io::Write;
+    let mut child = (cmd
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped()))
+    .spawn()
+    .expect("qcs runs");
+    let mut stdin = child.stdin.take().expect("stdin");
+    let input = input.to_vec();
+    let writer = std::thread::spawn(move || stdin.write_all(&input));
+    let out = child.wait_with_output().expect("qcs ends");
+    writer.join().expect("writer").expect("qcs reads its input");
+    out
+}
+
+/// `-` is standard input or output: a pipe encodes, decodes and inspects as files do, and a
+/// cut pipe is a smaller picture.
+#[test]
+fn pipes_work_as_files() {
+    let (file, png) = (scratch("pipe.qcs"), scratch("pipe.png"));
+    assert!(run(qcs().args(["-q", "encode", ROCKET]).arg(&file))
+        .status
+        .success());
+    let qcs_bytes = std::fs::read(&file).expect("read");
+    let enc = piped(
+        qcs().args(["-q", "encode", "-", "-"]),
+        &std::fs::read(ROCKET).expect("read"),
+    );
+    assert!(enc.status.success(), "{enc:?}");
+    assert!(enc.stdout == qcs_bytes, "the same file through a pipe");
+    let size = ["--size", "97x61"];
+    let dec = run(qcs().args(["-q", "decode"]).arg(&file).arg(&png).args(size));
+    assert!(dec.status.success(), "{dec:?}");
+    let dec = piped(
+        qcs().args(["-q", "decode", "-", "-"]).args(size),
+        &qcs_bytes,
+    );
+    assert!(dec.status.success(), "{dec:?}");
+    assert!(
+        dec.stdout == std::fs::read(&png).expect("read"),
+        "the same PNG through a pipe"
+    );
+    let cut = &qcs_bytes[..2000];
+    let dec = piped(qcs().args(["-q", "decode", "-", "-"]), cut);
+    assert!(dec.status.success(), "{dec:?}");
+    let img = image::load_from_memory(&dec.stdout).expect("a PNG");
+    assert_eq!((img.width(), img.height()), (480, 320));
+    let info = piped(qcs().args(["info", "-"]), cut);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        text.contains("(2000 bytes)") && text.contains("end: inside chunk"),
+        "{text}"
+    );
+    let many = run(qcs()
+        .args(["encode", "--out-dir"])
+        .arg(scratch("pipe-dir"))
+        .arg("-"));
+    assert_eq!(many.status.code(), Some(1), "{many:?}");
+}
+
 /// Exit codes as documented in `qcs --help`: 3 for a malformed file, 1 for a missing one.
 #[test]
 fn exit_codes() {

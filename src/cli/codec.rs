@@ -47,7 +47,8 @@ pub use qcs::coding::predictive::DEFAULT_QUALITY;
 
 #[derive(Args, Debug)]
 pub struct EncodeArgs {
-    /// Input image(s) or directories, then the output .qcs when encoding one file without --out-dir.
+    /// Input image(s) or directories, then the output .qcs when encoding one file without
+    /// --out-dir (`-`: standard input or output).
     #[arg(required = true, num_args = 1..)]
     pub paths: Vec<PathBuf>,
     /// Encode every input into this directory (as NAME.qcs), in parallel.
@@ -185,9 +186,9 @@ fn encode_file(
         })?;
     let bytes =
         qcs::encode(&img, &opts).with_context(|| format!("cannot encode {}", input.display()))?;
-    std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
+    super::write_output(output, &bytes)?;
     Ok(Encoded {
-        input: std::fs::metadata(input).map(|m| m.len()).unwrap_or(0),
+        input: std::fs::metadata(input).map_or(0, |m| m.len()),
         output: bytes.len() as u64,
         icc: opts.icc.as_ref().map(Vec::len),
         capped_from,
@@ -234,13 +235,18 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
                 a.paths[1].display()
             );
         }
+        super::check_output(&a.paths[1])?;
         let e = encode_file(&a.paths[0], &a.paths[1], &opts, flags)?;
         if !quiet {
             eprintln!(
-                "{} → {}: {} → {} bytes{}",
+                "{} → {}: {}{} bytes{}",
                 a.paths[0].display(),
                 a.paths[1].display(),
-                e.input,
+                // Standard input has no size to tell.
+                match super::is_stdio(&a.paths[0]) {
+                    true => String::new(),
+                    false => format!("{} → ", e.input),
+                },
                 e.output,
                 e.icc
                     .map(|n| format!(" (with its {n}-byte ICC profile)"))
@@ -256,6 +262,11 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
         }
         return Ok(());
     };
+    if a.paths.iter().any(|p| super::is_stdio(p)) {
+        bail!(
+            "standard input (-) is one image: encode it without --out-dir (qcs encode - OUT.qcs)"
+        );
+    }
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut inputs = Vec::new();
     for p in &a.paths {
@@ -343,9 +354,10 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
 
 #[derive(Args, Debug)]
 pub struct DecodeArgs {
-    /// The .qcs file.
+    /// The .qcs file (`-`: standard input, read to its end).
     pub input: PathBuf,
-    /// The output image (PNG, JPEG, … by extension); optional with --frames.
+    /// The output image (PNG, JPEG, … by extension; `-`: PNG on standard output); optional
+    /// with --frames.
     pub output: Option<PathBuf>,
     /// Reconstruction method.
     #[arg(long, value_enum, default_value = "gouraud")]
@@ -410,12 +422,8 @@ fn stream_decoder(size: (u32, u32), thumbnail: bool, recover: bool) -> StreamDec
     })
 }
 
-fn read(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
-}
-
 pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
-    let bytes = read(&a.input)?;
+    let bytes = super::read_input(&a.input)?;
     let ctx = || format!("cannot decode {}", a.input.display());
     if let Some(dir) = &a.frames {
         frames(&a, &bytes, dir, quiet).with_context(ctx)?;
@@ -551,12 +559,12 @@ fn level_ends(bytes: &[u8]) -> Vec<usize> {
 
 #[derive(Args, Debug)]
 pub struct InfoArgs {
-    /// The .qcs file.
+    /// The .qcs file (`-`: standard input).
     pub input: PathBuf,
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
-    let bytes = read(&a.input)?;
+    let bytes = super::read_input(&a.input)?;
     let ins = qcs::container::inspect(&bytes);
     say!("file: {} ({} bytes)", a.input.display(), ins.file_len);
     if let Some(h) = &ins.header {
@@ -732,9 +740,9 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
 
 #[derive(Args, Debug)]
 pub struct PreviewArgs {
-    /// The .qcs file.
+    /// The .qcs file (`-`: standard input).
     pub input: PathBuf,
-    /// The animated GIF to write.
+    /// The animated GIF to write (`-`: standard output).
     pub output: PathBuf,
     /// Bytes between frames (default: one frame per level).
     #[arg(long, value_parser = super::parse_count)]
@@ -806,7 +814,8 @@ fn stamp(img: &mut image::RgbaImage, text: &str) {
 pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
     use image::codecs::gif::{GifEncoder, Repeat};
     use image::{Delay, Frame};
-    let bytes = read(&a.input)?;
+    super::check_output(&a.output)?;
+    let bytes = super::read_input(&a.input)?;
     let ctx = || format!("cannot decode {}", a.input.display());
     let mut cuts: Vec<usize> = match a.every {
         Some(k) => (1..)
@@ -857,8 +866,7 @@ pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
     if frames == 0 {
         return Err(qcs::Error::NeedMoreData).with_context(ctx);
     }
-    std::fs::write(&a.output, &gif_bytes)
-        .with_context(|| format!("cannot write {}", a.output.display()))?;
+    super::write_output(&a.output, &gif_bytes)?;
     if !quiet {
         eprintln!("{}: {frames} frames", a.output.display());
     }

@@ -31,12 +31,12 @@ pub struct Cli {
 pub enum Command {
     /// Encode images (any format the image crate reads) to .qcs.
     #[command(
-        after_help = "Examples:\n  qcs encode photo.png photo.qcs\n  qcs encode photo.jpg photo.qcs --samples 20000 --bits 6\n  qcs encode photos/ *.png --out-dir qcs/   (many files in parallel)"
+        after_help = "Examples:\n  qcs encode photo.png photo.qcs\n  qcs encode photo.jpg photo.qcs --samples 20000 --bits 6\n  qcs encode photos/ *.png --out-dir qcs/   (many files in parallel)\n  convert photo.tif png:- | qcs encode - - > photo.qcs   (standard input and output)"
     )]
     Encode(codec::EncodeArgs),
     /// Decode a .qcs file (or a prefix of one) to an image; the format follows the extension.
     #[command(
-        after_help = "Examples:\n  qcs decode photo.qcs photo.png\n  qcs decode photo.qcs thumb.png --size 120x80 --method shepard\n  qcs decode photo.qcs cut.png --bytes 2048   (as a cut download would)\n  qcs decode photo.qcs --frames frames/ --every 4096"
+        after_help = "Examples:\n  qcs decode photo.qcs photo.png\n  qcs decode photo.qcs thumb.png --size 120x80 --method shepard\n  qcs decode photo.qcs cut.png --bytes 2048   (as a cut download would)\n  qcs decode photo.qcs --frames frames/ --every 4096\n  curl -s URL | qcs decode - - > photo.png   (standard input to PNG on standard output)"
     )]
     Decode(codec::DecodeArgs),
     /// Show a .qcs file's header, levels (byte offsets, sample ranges) and CRC status.
@@ -170,8 +170,53 @@ pub const SAMPLERS: [&str; 6] = [
     "farthest",
 ];
 
-/// Reads an image, recognising its format by content (as `render` does), not by extension,
-/// upright: its Exif orientation (a camera's "rotate 90°") is applied to the pixels.
+/// Whether a path argument is `-`: standard input as an input, standard output as an output.
+pub fn is_stdio(p: &std::path::Path) -> bool {
+    p.as_os_str() == "-"
+}
+
+/// The bytes of the file `p`, or of standard input for `-` (to its end: a cut pipe is a
+/// prefix like any other).
+pub fn read_input(p: &std::path::Path) -> anyhow::Result<Vec<u8>> {
+    use anyhow::Context;
+    use std::io::Read;
+    if is_stdio(p) {
+        let mut bytes = Vec::new();
+        (std::io::stdin().lock().read_to_end(&mut bytes)).context("cannot read standard input")?;
+        return Ok(bytes);
+    }
+    std::fs::read(p).with_context(|| format!("cannot read {}", p.display()))
+}
+
+/// Refuses `-` as an output when standard output is a terminal, where binary data would only
+/// garble the screen; call it before the work that makes the output.
+pub fn check_output(p: &std::path::Path) -> anyhow::Result<()> {
+    use std::io::IsTerminal;
+    if is_stdio(p) && std::io::stdout().is_terminal() {
+        anyhow::bail!(
+            "not writing binary data to a terminal: redirect standard output (qcs … - > FILE)"
+        );
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to the file `p`, or to standard output for `-`.
+pub fn write_output(p: &std::path::Path, bytes: &[u8]) -> anyhow::Result<()> {
+    use anyhow::Context;
+    use std::io::Write;
+    if is_stdio(p) {
+        check_output(p)?;
+        let mut out = std::io::stdout().lock();
+        (out.write_all(bytes).and_then(|()| out.flush()))
+            .context("cannot write standard output")?;
+        return Ok(());
+    }
+    std::fs::write(p, bytes).with_context(|| format!("cannot write {}", p.display()))
+}
+
+/// Reads an image (standard input for `-`), recognising its format by content (as `render`
+/// does), not by extension, upright: its Exif orientation (a camera's "rotate 90°") is
+/// applied to the pixels.
 pub fn open_image(p: &std::path::Path) -> anyhow::Result<image::DynamicImage> {
     Ok(read_image(p)?.0)
 }
@@ -184,11 +229,18 @@ pub fn read_image(p: &std::path::Path) -> anyhow::Result<(image::DynamicImage, O
     use anyhow::Context;
     use image::ImageDecoder;
     let ctx = || format!("cannot read image {}", p.display());
-    let mut decoder = image::ImageReader::open(p)
-        .map_err(image::ImageError::IoError)
-        .and_then(|r| r.with_guessed_format().map_err(image::ImageError::IoError))
-        .and_then(|r| r.into_decoder())
-        .with_context(ctx)?;
+    let mut decoder: Box<dyn ImageDecoder> = if is_stdio(p) {
+        let bytes = std::io::Cursor::new(read_input(p)?);
+        (image::ImageReader::new(bytes).with_guessed_format())
+            .map_err(image::ImageError::IoError)
+            .and_then(|r| r.into_decoder().map(|d| Box::new(d) as _))
+    } else {
+        image::ImageReader::open(p)
+            .map_err(image::ImageError::IoError)
+            .and_then(|r| r.with_guessed_format().map_err(image::ImageError::IoError))
+            .and_then(|r| r.into_decoder().map(|d| Box::new(d) as _))
+    }
+    .with_context(ctx)?;
     let icc = decoder.icc_profile().ok().flatten();
     let orientation = decoder
         .orientation()
@@ -243,8 +295,13 @@ pub fn is_srgb(icc: &[u8]) -> bool {
     desc().is_some_and(|d| d.contains("sRGB"))
 }
 
-/// The image format an output path's extension names.
+/// The image format an output path's extension names; PNG for `-` (standard output, checked
+/// with [`check_output`]).
 pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageFormat> {
+    if is_stdio(path) {
+        check_output(path)?;
+        return Ok(image::ImageFormat::Png);
+    }
     image::ImageFormat::from_path(path).map_err(|_| {
         anyhow::anyhow!(
             "cannot write {}: unknown image format (use .png, .jpg, .gif, .bmp, .tiff, .webp, .pnm, .qoi or .tga)",
@@ -267,7 +324,6 @@ pub fn save_image_icc(
     path: &std::path::Path,
     icc: Option<&[u8]>,
 ) -> anyhow::Result<bool> {
-    use anyhow::Context;
     use image::codecs::{jpeg, png, tiff, webp};
     use image::{ImageEncoder, ImageFormat};
     /// Writes `img` with `enc` carrying `icc`, or `None` if `enc` refuses profiles.
@@ -305,7 +361,7 @@ pub fn save_image_icc(
         (bytes, result, kept) = write(&wide);
     }
     result.map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
-    std::fs::write(path, bytes).with_context(|| format!("cannot write {}", path.display()))?;
+    write_output(path, &bytes)?;
     Ok(kept)
 }
 

@@ -26,9 +26,9 @@ pub enum Style {
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// A .qcs file, or an ordinary image to sample with --sampler.
+    /// A .qcs file, or an ordinary image to sample with --sampler (`-`: standard input).
     pub input: PathBuf,
-    /// The output PNG.
+    /// The output PNG (`-`: standard output).
     pub output: PathBuf,
     /// The rendering style.
     #[arg(long, value_enum, default_value = "mosaic")]
@@ -84,8 +84,7 @@ impl Samples {
 }
 
 fn samples(a: &RenderArgs) -> Result<Samples> {
-    let bytes =
-        std::fs::read(&a.input).with_context(|| format!("cannot read {}", a.input.display()))?;
+    let bytes = super::read_input(&a.input)?;
     if bytes.starts_with(&qcs::container::MAGIC) {
         let mut d = StreamDecoder::new(qcs::Limits::default());
         d.push(&bytes)
