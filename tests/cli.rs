@@ -108,6 +108,18 @@ fn pipes_work_as_files() {
         .arg(scratch("pipe-dir"))
         .arg("-"));
     assert_eq!(many.status.code(), Some(1), "{many:?}");
+    // On a terminal (util-linux `script` gives one, where it is installed) `-` is refused.
+    let on_tty = format!("{} decode {} -", env!("CARGO_BIN_EXE_qcs"), file.display());
+    if let Ok(tty) = Command::new("script")
+        .args(["-qc", &on_tty, "/dev/null"])
+        .output()
+    {
+        let text = String::from_utf8_lossy(&tty.stdout);
+        assert!(
+            text.contains("not writing binary data to a terminal"),
+            "{text}"
+        );
+    }
 }
 
 /// Exit codes as documented in `qcs --help`: 3 for a malformed file, 1 for a missing one.
