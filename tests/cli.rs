@@ -108,13 +108,17 @@ fn pipes_work_as_files() {
         .arg(scratch("pipe-dir"))
         .arg("-"));
     assert_eq!(many.status.code(), Some(1), "{many:?}");
-    // On a terminal (util-linux `script` gives one, where it is installed) `-` is refused.
-    let on_tty = format!("{} decode {} -", env!("CARGO_BIN_EXE_qcs"), file.display());
-    if let Ok(tty) = Command::new("script")
-        .args(["-qc", &on_tty, "/dev/null"])
-        .output()
-    {
-        let text = String::from_utf8_lossy(&tty.stdout);
+    // On a terminal `-` is refused: util-linux `script` gives one, where it is installed
+    // and can open a pseudo-terminal.
+    let script = |cmd: &str| {
+        Command::new("script")
+            .args(["-qc", cmd, "/dev/null"])
+            .output()
+    };
+    if script("tty").is_ok_and(|o| o.stdout.starts_with(b"/dev/")) {
+        let on_tty = format!("{} decode {} -", env!("CARGO_BIN_EXE_qcs"), file.display());
+        let out = script(&on_tty).expect("script runs");
+        let text = String::from_utf8_lossy(&out.stdout);
         assert!(
             text.contains("not writing binary data to a terminal"),
             "{text}"
