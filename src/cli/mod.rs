@@ -229,16 +229,23 @@ pub fn read_image(p: &std::path::Path) -> anyhow::Result<(image::DynamicImage, O
     use anyhow::Context;
     use image::ImageDecoder;
     let ctx = || format!("cannot read image {}", p.display());
-    let mut decoder: Box<dyn ImageDecoder> = if is_stdio(p) {
-        let bytes = std::io::Cursor::new(read_input(p)?);
-        (image::ImageReader::new(bytes).with_guessed_format())
-            .map_err(image::ImageError::IoError)
-            .and_then(|r| r.into_decoder().map(|d| Box::new(d) as _))
+    /// A decoder for the image `r` holds, its format guessed from its first bytes.
+    fn by_content<'a, R: std::io::BufRead + std::io::Seek + 'a>(
+        r: image::ImageReader<R>,
+    ) -> image::ImageResult<Box<dyn ImageDecoder + 'a>> {
+        let r = r
+            .with_guessed_format()
+            .map_err(image::ImageError::IoError)?;
+        Ok(Box::new(r.into_decoder()?))
+    }
+    let mut decoder = if is_stdio(p) {
+        by_content(image::ImageReader::new(std::io::Cursor::new(read_input(
+            p,
+        )?)))
     } else {
         image::ImageReader::open(p)
             .map_err(image::ImageError::IoError)
-            .and_then(|r| r.with_guessed_format().map_err(image::ImageError::IoError))
-            .and_then(|r| r.into_decoder().map(|d| Box::new(d) as _))
+            .and_then(by_content)
     }
     .with_context(ctx)?;
     let icc = decoder.icc_profile().ok().flatten();
