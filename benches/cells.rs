@@ -9,8 +9,8 @@
 //! Group `exact_cells` (16k, 65k, 262k sites on 1024², samples and mirror points) times how
 //! the canonical cells are made, from the points alone: `spade_bulk_load` (spade's
 //! triangulation only, not yet the cells), `spade_then_exact` (that, then exact flips and
-//! merges: `Cells::build`) and `incremental` (exact insertion: `Cells::incremental`, what a
-//! `SampleSet` does).
+//! merges: `Cells::build`), `incremental` (exact insertion: `Cells::incremental`, what a
+//! growing `SampleSet` does) and `atlas` (look-up of local configurations: `Cells::atlas`).
 //!
 //! Run: `cargo bench --bench cells -- --warm-up-time 1 --measurement-time 3`
 
@@ -98,6 +98,9 @@ fn exact_cells(c: &mut Criterion) {
         });
         g.bench_function(BenchmarkId::new("incremental", n), |b| {
             b.iter(|| black_box(Cells::incremental(set.points(), &lattice).map(|c| c.len())))
+        });
+        g.bench_function(BenchmarkId::new("atlas", n), |b| {
+            b.iter(|| black_box(Cells::atlas(set.points(), &lattice).map(|c| c.len())))
         });
     }
     g.finish();

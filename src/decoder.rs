@@ -767,7 +767,8 @@ fn push_whole(
             for s in &sites[..sure] {
                 set.push_site(s, &blank);
             }
-            set.build_cells();
+            // With every sample present verified, the render adds none.
+            set.build_cells(sure == present);
             set
         },
     );

@@ -104,6 +104,30 @@ impl Cells {
         Some(LiveCells::grow(positions, lattice)?.cells())
     }
 
+    /// The canonical cells of the points `lattice` (at pixel `positions`), built like
+    /// [`Cells::incremental`] near the hull and by look-up elsewhere: a quasicrystal has few
+    /// local configurations, so the cells around most sites are computed once per
+    /// configuration and copied for the others (`src/reconstruction/atlas.rs` says why that
+    /// is exact). The same cells as [`Cells::incremental`] (in another order), several times
+    /// faster on large sets (`benches/cells.rs`), and `None` in the same cases. For a set that
+    /// gets no more points; a growing one keeps [`Cells::incremental`]'s structure.
+    ///
+    /// ```
+    /// use qcs::reconstruction::{Cells, SampleSet};
+    /// use qcs::sites::Quasicrystal;
+    /// let mut set = SampleSet::new(256, 256, 1);
+    /// for s in Quasicrystal::new(256, 256)?.first(8000) {
+    ///     set.push_exact(s.pos, s.lattice, &[0]);
+    /// }
+    /// let (p, l) = (set.points(), set.point_lattice());
+    /// let sorted = |c: Cells| { let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect(); v.sort(); v };
+    /// assert_eq!(sorted(Cells::atlas(p, l).unwrap()), sorted(Cells::incremental(p, l).unwrap()));
+    /// # Ok::<(), qcs::sites::FrameError>(())
+    /// ```
+    pub fn atlas(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<Cells> {
+        super::atlas::cells(positions, lattice)
+    }
+
     pub(crate) fn from_parts(
         offsets: Vec<u32>,
         vertices: Vec<u32>,

@@ -26,7 +26,7 @@ const NONE: u32 = u32::MAX;
 
 /// Lattice points under internal ids: exact, cached in `f64`, and their point index.
 #[derive(Clone, Debug, Default)]
-struct Store {
+pub(crate) struct Store {
     zz: Vec<ZZeta>,
     /// `(Re, Im)` of the point in `f64` and a bound on the error of either.
     xy: Vec<[f64; 3]>,
@@ -121,7 +121,7 @@ fn norm_says_zero(f: f64, err: f64, g: f64, gerr: f64) -> bool {
 }
 
 impl Store {
-    fn push(&mut self, x: ZZeta, ext: u32) -> u32 {
+    pub(crate) fn push(&mut self, x: ZZeta, ext: u32) -> u32 {
         let c = cached(x);
         self.zz.push(x);
         self.xy.push(c);
@@ -170,7 +170,7 @@ impl Store {
     /// cached positions unless they are within their error bound of collinear, then from
     /// the star images' ([`norm_says_zero`]), then exactly.
     #[inline(always)]
-    fn orient(&self, a: u32, b: u32, c: u32) -> i32 {
+    pub(crate) fn orient(&self, a: u32, b: u32, c: u32) -> i32 {
         let [a, b, c] = [a, b, c].map(|i| i as usize);
         let (det, bound) = orient_f(self.xy[a], self.xy[b], self.xy[c]);
         if det.abs() > self.quick_orient {
@@ -192,7 +192,7 @@ impl Store {
     /// Exact incircle test of `d` against `a, b, c` (as [`crate::lattice::incircle`]), decided
     /// like [`Store::orient`].
     #[inline]
-    fn incircle(&self, a: u32, b: u32, c: u32, d: u32) -> i32 {
+    pub(crate) fn incircle(&self, a: u32, b: u32, c: u32, d: u32) -> i32 {
         let [a, b, c, d] = [a, b, c, d].map(|i| i as usize);
         let (det, bound) = incircle_f(self.xy[a], self.xy[b], self.xy[c], self.xy[d]);
         if det > bound {

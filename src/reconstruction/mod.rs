@@ -45,6 +45,7 @@
 // Per-channel loops over fixed-size colour arrays read best with indices.
 #![allow(clippy::needless_range_loop)]
 
+mod atlas;
 mod cells;
 mod cubic;
 mod delaunay;
@@ -467,7 +468,7 @@ impl SampleSet {
     /// sees, exact flips repair the Delaunay property around it, and only the changed
     /// triangles' edges are tested for cocircularity again).
     pub fn cells(&mut self) -> Option<&Cells> {
-        self.sync_cells();
+        self.sync_cells(false);
         self.cells.as_ref().and_then(|(_, c)| c.as_ref())
     }
 
@@ -478,10 +479,11 @@ impl SampleSet {
         self.rebuilds
     }
 
-    /// Builds the cells of the points so far (and keeps the triangulation behind them, to
-    /// insert more points): e.g. on another thread, before the colours are known.
-    pub(crate) fn build_cells(&mut self) {
-        self.sync_cells();
+    /// Builds the cells of the points so far: e.g. on another thread, before the colours
+    /// are known. Unless `last` (no more points will come), the triangulation behind them
+    /// is kept, to insert more points.
+    pub(crate) fn build_cells(&mut self, last: bool) {
+        self.sync_cells(last);
     }
 
     /// Prepares a set that will get no more points for `method`'s renders, freeing what only
@@ -489,12 +491,15 @@ impl SampleSet {
     /// built and the insertion structure behind them dropped (about 170 bytes a point).
     pub(crate) fn settle(&mut self, method: Method) {
         if matches!(method, Method::Gouraud | Method::Cubic) {
-            self.sync_cells();
+            self.sync_cells(true);
             self.live = None;
         }
     }
 
-    fn sync_cells(&mut self) {
+    /// Brings the cells up to date: by inserting the new points into the kept
+    /// triangulation, or else afresh, by look-up ([`Cells::atlas`]) if `last` (no more
+    /// points will come, so no triangulation need be kept), or by exact insertion.
+    fn sync_cells(&mut self, last: bool) {
         let pts = &self.points;
         let n = pts.positions.len();
         if self.cells.as_ref().map(|c| c.0) == Some(n) {
@@ -509,15 +514,22 @@ impl SampleSet {
             Some(live) => live.extend(&pts.lattice).is_ok(),
             None => false,
         };
+        let mut cells = None;
         if !grown {
-            // By exact insertion; spade's whole triangulation only if that gives up.
-            self.live = LiveCells::grow(&pts.positions, &pts.lattice).or_else(|| {
-                mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
-                LiveCells::build(&self.mesh, &pts.lattice)
-            });
             self.rebuilds += 1;
+            self.live = None;
+            if last {
+                cells = Cells::atlas(&pts.positions, &pts.lattice);
+            }
+            if cells.is_none() {
+                // By exact insertion; spade's whole triangulation only if that gives up.
+                self.live = LiveCells::grow(&pts.positions, &pts.lattice).or_else(|| {
+                    mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
+                    LiveCells::build(&self.mesh, &pts.lattice)
+                });
+            }
         }
-        let cells = self.live.as_ref().map(LiveCells::cells);
+        let cells = cells.or_else(|| self.live.as_ref().map(LiveCells::cells));
         self.cells = Some((n, cells.filter(|c| !c.is_empty())));
     }
 
@@ -554,7 +566,7 @@ impl SampleSet {
             return vec![128; w * h * c];
         }
         if matches!(method, Method::Gouraud | Method::Cubic) {
-            self.sync_cells();
+            self.sync_cells(false);
         }
         let mut frame = Frame {
             width: w,
