@@ -597,11 +597,34 @@ mod tests {
         }
     }
 
+    /// The cells of arbitrary lattice points at `10·x + 500` px (with repeats).
+    fn scattered(coeffs: &[[i64; 4]]) -> (Vec<Point>, Vec<Option<ZZeta>>) {
+        let zz: Vec<ZZeta> = coeffs.iter().map(|&c| ZZeta::new(c)).collect();
+        let pos = zz
+            .iter()
+            .map(|x| x.to_f64())
+            .map(|(re, im)| [500.0 + 10.0 * re, 500.0 + 10.0 * im]);
+        (pos.collect(), zz.into_iter().map(Some).collect())
+    }
+
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(16))]
+        #![proptest_config(ProptestConfig::with_cases(32))]
         #[test]
         fn any_frame_and_prefix(w in 40u32..500, h in 40u32..500, n in 500usize..12_000) {
             check(&set(w, h, n));
+        }
+
+        #[test]
+        fn any_lattice_points(c in proptest::collection::vec(proptest::array::uniform4(-6i64..6), 3..3000)) {
+            let (p, l) = scattered(&c);
+            let want = Cells::incremental(&p, &l);
+            let got = cells_with(&p, &l, true).map(|g| g.0);
+            let sorted = |c: Cells| {
+                let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();
+                v.sort();
+                (v, c.hull().to_vec())
+            };
+            prop_assert_eq!(got.map(sorted), want.map(sorted));
         }
     }
 }
