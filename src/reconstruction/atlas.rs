@@ -43,8 +43,8 @@ const PILOT: usize = 64;
 /// Their neighbourhoods' radius, in mean spacings of the points (√(area / points)): the
 /// cells of an interior site of a quasicrystal reach up to about 2.4 of them.
 const PILOT_REACH: f64 = 3.5;
-/// The grid's side, in mean spacings.
-const SIDE: f64 = 1.25;
+/// The grid's side for the pilot, in mean spacings (then it is half the key's radius).
+const PILOT_SIDE: f64 = 1.75;
 
 /// Which lattice vectors (by their index in [`Vectors`]) lead from a site to a point.
 type Key = [u64; MAX_VECTORS / 64];
@@ -113,7 +113,12 @@ fn cells_with(
         .iter()
         .map(|x| x.filter(|&x| within_exact_limit(x)))
         .collect::<Option<_>>()?;
-    let Some((reach, grid)) = Grid::new(positions, &zz).and_then(|g| Some((g.radius()?, g))) else {
+    // The key's radius from a grid for the pilot, then a grid for that radius.
+    let pilot = Grid::new(positions, &zz);
+    let Some((reach, grid)) = pilot.and_then(|g| {
+        let r = g.radius()?;
+        Some((r, g.with_side(r / 2.0)?))
+    }) else {
         return all();
     };
     let mut vectors = Vectors::default();
@@ -153,16 +158,17 @@ fn cells_with(
                 if !ok {
                     continue;
                 }
-                if !atlas.contains_key(&key) {
+                let star = match atlas.get(&key) {
+                    Some(star) => star,
                     // Near the edges keys are mostly unique: not worth a local build.
-                    if !pass || atlas.len() >= budget {
-                        continue;
+                    None if !pass || atlas.len() >= budget => continue,
+                    None => {
+                        let star = local.star(&grid, c, k, reach, &mut vectors);
+                        let star = star.filter(|s| s.1 <= reach * (1.0 - 1e-9)).map(|s| s.0);
+                        atlas.entry(key).or_insert(star)
                     }
-                    let star = local.star(&grid, c, k, reach, &mut vectors);
-                    let star = star.filter(|s| s.1 <= reach * (1.0 - 1e-9)).map(|s| s.0);
-                    atlas.insert(key, star);
-                }
-                let Some(Some(star)) = atlas.get(&key) else {
+                };
+                let Some(star) = star else {
                     continue;
                 };
                 decided[i] = true;
@@ -371,6 +377,7 @@ impl Vectors {
 struct Grid {
     /// The mean spacing of the points, √(area / points), in the box of their central 98 %.
     spacing: f64,
+    central: [Point; 2],
     side: f64,
     /// Buckets (columns, rows) well inside that box.
     inner: [std::ops::Range<usize>; 2],
@@ -385,6 +392,8 @@ struct Grid {
 
 impl Grid {
     /// `None` if the points span no area (or too little for the buckets to make sense).
+    /// The points in buckets of [`PILOT_SIDE`] mean spacings. `None` if they span no area
+    /// (or too little for buckets to make sense).
     fn new(positions: &[Point], zz: &[ZZeta]) -> Option<Grid> {
         let n = positions.len();
         if positions.iter().flatten().any(|x| !x.is_finite()) {
@@ -407,18 +416,51 @@ impl Grid {
         let count = positions.iter().filter(inside).count();
         let area = (qhi[0] - qlo[0]) * (qhi[1] - qlo[1]);
         let spacing = (area / count as f64).sqrt();
-        let side = SIDE * spacing;
+        let point: Vec<u32> = (0..n as u32).collect();
+        let central = [qlo, qhi];
+        Grid::bucket(
+            spacing,
+            central,
+            PILOT_SIDE * spacing,
+            &point,
+            positions,
+            zz,
+        )
+    }
+
+    /// The same points in buckets of `side`.
+    fn with_side(&self, side: f64) -> Option<Grid> {
+        Grid::bucket(
+            self.spacing,
+            self.central,
+            side,
+            &self.point,
+            &self.pos,
+            &self.zz,
+        )
+    }
+
+    /// Points `point` (at `pos`, `zz`) in buckets of `side` over the box `central` and a
+    /// margin; points beyond go to its edge buckets (which keeps every point within a
+    /// distance of another within as many buckets).
+    fn bucket(
+        spacing: f64,
+        central: [Point; 2],
+        side: f64,
+        point: &[u32],
+        pos: &[Point],
+        zz: &[ZZeta],
+    ) -> Option<Grid> {
+        let [qlo, qhi] = central;
         if !(side.is_finite() && side > 0.0) {
             return None;
         }
-        // The grid spans that box and a margin; points beyond go to its edge buckets (which
-        // keeps every point within a distance within as many buckets).
         let margin = |a: usize| 0.05 * (qhi[a] - qlo[a]) + 4.0 * side;
         let lo = [qlo[0] - margin(0), qlo[1] - margin(1)];
         let hi = [qhi[0] + margin(0), qhi[1] + margin(1)];
         let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
         let (cols, rows) = ((w / side) as usize + 1, (h / side) as usize + 1);
-        if cols.checked_mul(rows)? > 4 * n + 16 {
+        if cols.checked_mul(rows)? > 4 * pos.len() + 16 {
             return None;
         }
         // Buckets three or more inside the central box.
@@ -427,37 +469,37 @@ impl Grid {
             first..(((qhi[a] - lo[a]) / side) as usize).saturating_sub(2)
         };
         let inner = [span(0), span(1)];
-        let bucket = |p: Point| {
-            // (`as` saturates: negative to 0.)
-            let (x, y) = ((p[0] - lo[0]) / side, (p[1] - lo[1]) / side);
-            (y as usize).min(rows - 1) * cols + (x as usize).min(cols - 1)
-        };
+        let of: Vec<u32> = (pos.iter())
+            .map(|p| {
+                // (`as` saturates: negative to 0.)
+                let (x, y) = ((p[0] - lo[0]) / side, (p[1] - lo[1]) / side);
+                ((y as usize).min(rows - 1) * cols + (x as usize).min(cols - 1)) as u32
+            })
+            .collect();
         let mut start = vec![0u32; cols * rows + 1];
-        for &p in positions {
-            start[bucket(p) + 1] += 1;
+        for &b in &of {
+            start[b as usize + 1] += 1;
         }
         for c in 0..cols * rows {
             start[c + 1] += start[c];
         }
         let mut fill = start.clone();
-        let mut point = vec![0u32; n];
-        for (i, &p) in positions.iter().enumerate() {
-            let b = bucket(p);
-            point[fill[b] as usize] = i as u32;
-            fill[b] += 1;
+        let mut order = vec![0u32; pos.len()];
+        for (k, &b) in of.iter().enumerate() {
+            order[fill[b as usize] as usize] = k as u32;
+            fill[b as usize] += 1;
         }
-        let pos = point.iter().map(|&i| positions[i as usize]).collect();
-        let zz = point.iter().map(|&i| zz[i as usize]).collect();
         Some(Grid {
             spacing,
+            central,
             side,
             inner,
             cols,
             rows,
             start,
-            point,
-            pos,
-            zz,
+            point: order.iter().map(|&k| point[k as usize]).collect(),
+            pos: order.iter().map(|&k| pos[k as usize]).collect(),
+            zz: order.iter().map(|&k| zz[k as usize]).collect(),
         })
     }
 
