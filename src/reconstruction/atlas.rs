@@ -579,15 +579,28 @@ mod tests {
         set
     }
 
-    /// Asserts that the look-up gives exact insertion's cells and hull; returns the share
-    /// of the points that were looked up.
-    fn check(set: &SampleSet) -> f64 {
-        let (p, l) = (set.points(), set.point_lattice());
+    /// Asserts that the look-up gives exact insertion's cells and hull (and those of
+    /// spade's triangulation, made exact, if `spade`); returns the share of the points that
+    /// were looked up.
+    fn check(set: &mut SampleSet, spade: bool) -> f64 {
         let sorted = |c: &Cells| {
             let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();
             v.sort();
             v
         };
+        if spade {
+            let mesh = set.triangulation().clone();
+            let (got, want) = (
+                cells(set.points(), set.point_lattice()),
+                Cells::build(&mesh, set.point_lattice()),
+            );
+            assert_eq!(
+                got.as_ref().map(sorted),
+                want.as_ref().map(sorted),
+                "against spade"
+            );
+        }
+        let (p, l) = (set.points(), set.point_lattice());
         let want = Cells::incremental(p, l).unwrap();
         let (got, decided) = cells_with(p, l, true).unwrap();
         let (g, e) = (sorted(&got), sorted(&want));
@@ -616,7 +629,7 @@ mod tests {
             (97, 411, 12_000, 0.6),
             (512, 512, 53_000, 0.9),
         ] {
-            let got = check(&set(w, h, n));
+            let got = check(&mut set(w, h, n), n > 50_000);
             assert!(
                 got >= share,
                 "{w}×{h} at {n}: {got:.3} of the points looked up"
@@ -653,7 +666,7 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(32))]
         #[test]
         fn any_frame_and_prefix(w in 40u32..500, h in 40u32..500, n in 500usize..12_000) {
-            check(&set(w, h, n));
+            check(&mut set(w, h, n), false);
         }
 
         #[test]
