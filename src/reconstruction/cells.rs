@@ -108,9 +108,11 @@ impl Cells {
     /// [`Cells::incremental`] near the hull and by look-up elsewhere: a quasicrystal has few
     /// local configurations, so the cells around most sites are computed once per
     /// configuration and copied for the others (`src/reconstruction/atlas.rs` says why that
-    /// is exact). The same cells as [`Cells::incremental`] (in another order), several times
-    /// faster on large sets (`benches/cells.rs`), and `None` in the same cases. For a set that
-    /// gets no more points; a growing one keeps [`Cells::incremental`]'s structure.
+    /// is exact). The same cells as [`Cells::incremental`] (in another order), about twice
+    /// as fast from 50 000 points (`benches/cells.rs`; below that, or where the
+    /// configurations are too diverse to pay, it is exact insertion), and `None` in the same
+    /// cases. For a set that gets no more points; a growing one keeps
+    /// [`Cells::incremental`]'s structure.
     ///
     /// ```
     /// use qcs::reconstruction::{Cells, SampleSet};
