@@ -24,6 +24,7 @@
 //! the cells of the smaller set around `u`.
 
 use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 
 use super::cells::Cells;
 use super::delaunay::{LiveCells, Store};
@@ -55,24 +56,17 @@ type Key = [u64; MAX_VECTORS / 64];
 type Star = Option<Box<[u8]>>;
 
 /// A hasher for keys (bit sets), which need no protection from collisions.
-#[derive(Clone, Copy, Default)]
-struct KeyHasher;
-
-impl std::hash::BuildHasher for KeyHasher {
-    type Hasher = KeyHash;
-    fn build_hasher(&self) -> KeyHash {
-        KeyHash(0)
-    }
-}
-
+#[derive(Default)]
 struct KeyHash(u64);
 
 impl std::hash::Hasher for KeyHash {
     fn write(&mut self, bytes: &[u8]) {
-        for c in bytes.chunks(8) {
-            let mut x = [0u8; 8];
-            x[..c.len()].copy_from_slice(c);
-            self.write_u64(u64::from_le_bytes(x));
+        let mut words = bytes.chunks_exact(8);
+        for w in &mut words {
+            self.write_u64(u64::from_le_bytes(w.try_into().unwrap_or_default()));
+        }
+        for &b in words.remainder() {
+            self.write_u64(b.into());
         }
     }
     fn write_u64(&mut self, x: u64) {
@@ -122,7 +116,7 @@ fn cells_with(
         return all();
     };
     let mut vectors = Vectors::default();
-    let mut atlas: HashMap<Key, Star, KeyHasher> = HashMap::default();
+    let mut atlas: HashMap<Key, Star, BuildHasherDefault<KeyHash>> = HashMap::default();
     // New keys are built locally up to this many (one costs about as much as inserting
     // ten points exactly); later ones count as undecided.
     let budget = n / 16;
@@ -150,10 +144,11 @@ fn cells_with(
                         ok = false;
                         return;
                     };
+                    let (word, bit) = ((b >> 6) as usize, b & 63);
                     // (Two points at one lattice point would set a bit twice.)
-                    ok &= key[b / 64] >> (b % 64) & 1 == 0;
-                    key[b / 64] |= 1 << (b % 64);
-                    at[b] = grid.point[j];
+                    ok &= key[word] >> bit & 1 == 0;
+                    key[word] |= 1 << bit;
+                    at[b as usize] = grid.point[j];
                 });
                 if !ok {
                     continue;
@@ -242,7 +237,7 @@ impl Local {
             self.pos.push(grid.pos[j]);
             self.zz.push(grid.zz[j]);
             match vectors.index(diff(grid.zz[j], x)) {
-                Some(b) => self.bits.push(b as u8),
+                Some(b) => self.bits.push(b),
                 None => ok = false,
             }
         });
@@ -346,28 +341,25 @@ impl Default for Vectors {
 
 impl Vectors {
     /// The index of `v`, numbering it if it is new (`None` if the table is full).
-    fn index(&mut self, v: ZZeta) -> Option<usize> {
-        let [a, b, c, d] = v.0.map(|x| x as u64);
-        let h = a
-            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            .wrapping_add(b.wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
-            .wrapping_add(c.wrapping_mul(0x1656_67B1_9E37_79F9))
-            .wrapping_add(d.wrapping_mul(0x27D4_EB2F_1656_67C5));
+    fn index(&mut self, v: ZZeta) -> Option<u8> {
+        // The four coordinates, 16 bits each (a hash: equal ones are compared whole).
+        let [a, b, c, d] = v.0.map(|x| x as u64 & 0xFFFF);
+        let h = (a | b << 16 | c << 32 | d << 48).wrapping_mul(0x9E37_79B9_7F4A_7C15);
         let mut s = (h >> (64 - SLOTS.trailing_zeros())) as usize;
         loop {
-            let (z, k) = self.slots[s];
+            let (z, k) = self.slots[s % SLOTS];
             if k == EMPTY {
                 if self.count == MAX_VECTORS {
                     return None;
                 }
-                self.slots[s] = (v, self.count as u16);
+                self.slots[s % SLOTS] = (v, self.count as u16);
                 self.count += 1;
-                return Some(self.count - 1);
+                return Some((self.count - 1) as u8);
             }
             if z == v {
-                return Some(k as usize);
+                return Some(k as u8);
             }
-            s = (s + 1) % SLOTS;
+            s += 1;
         }
     }
 }
