@@ -42,7 +42,8 @@ const MAX_VECTORS: usize = 256;
 /// How many sites are triangulated locally to find the key's radius `D`.
 const PILOT: usize = 64;
 /// Their neighbourhoods' radius, in mean spacings of the points (√(area / points)): the
-/// cells of an interior site of a quasicrystal reach up to about 2.4 of them.
+/// circles of an interior site's cells reach 1.6–2.5 of them where look-up pays (up to 3.4
+/// in sparse phases; a pilot whose circles reach beyond is not counted).
 const PILOT_REACH: f64 = 3.5;
 /// The grid's side for the pilot, in mean spacings (then it is half the key's radius).
 const PILOT_SIDE: f64 = 1.75;
