@@ -146,11 +146,6 @@ fn stats() {
 /// A vertex star: the cells around a site, each as lattice vectors from it.
 type Star = Vec<Vec<[i64; 4]>>;
 
-/// The lattice vector from `a` to `b`.
-fn diff(a: ZZeta, b: ZZeta) -> [i64; 4] {
-    std::array::from_fn(|k| b.0[k] - a.0[k])
-}
-
 /// The vertex stars of the canonical cells of the first `n` sites of a `w × h` picture, for
 /// every site at least 8 spacings from the picture's edges: the cells around the site as
 /// lattice vectors from it (each cell's cycle starting at the site), sorted.
@@ -187,7 +182,7 @@ fn census(w: u32, h: u32, n: usize) -> Census {
         let mut star: Star = (around[p].iter())
             .map(|&k| {
                 let mut c: Vec<_> = (cells[k].iter())
-                    .map(|&v| diff(x, lat[v as usize].expect("exact")))
+                    .map(|&v| (lat[v as usize].expect("exact") - x).0)
                     .collect();
                 let at = (c.iter().position(|v| *v == [0; 4])).expect("the site is a vertex");
                 c.rotate_left(at);
@@ -244,7 +239,7 @@ impl Census {
                 for &k in grid.get(&(gx, gy)).into_iter().flatten() {
                     let r = pos[k];
                     if k != *p && (r[0] - q[0]).hypot(r[1] - q[1]) <= d {
-                        near.push(diff(*x, lat[k].expect("kept")));
+                        near.push((lat[k].expect("kept") - *x).0);
                     }
                 }
             }

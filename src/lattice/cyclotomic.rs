@@ -18,6 +18,20 @@ pub const SIN72: f64 = 0.951_056_516_295_153_5;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ZZeta(pub [i64; 4]);
 
+/// The lattice vector `self − o` (coordinate-wise).
+///
+/// ```
+/// use qcs::lattice::ZZeta;
+/// assert_eq!(ZZeta::new([3, 1, 0, -2]) - ZZeta::new([1, 1, 2, -2]), ZZeta::new([2, 0, -2, 0]));
+/// ```
+impl std::ops::Sub for ZZeta {
+    type Output = ZZeta;
+    #[inline]
+    fn sub(self, o: ZZeta) -> ZZeta {
+        ZZeta(std::array::from_fn(|k| self.0[k] - o.0[k]))
+    }
+}
+
 impl ZZeta {
     /// The point with coordinates `n`.
     pub const fn new(n: [i64; 4]) -> Self {

@@ -33,16 +33,6 @@ pub fn within_exact_limit(x: ZZeta) -> bool {
     x.0.iter().all(|&n| n > -EXACT_LIMIT && n < EXACT_LIMIT)
 }
 
-#[inline]
-fn diff(a: ZZeta, b: ZZeta) -> ZZeta {
-    ZZeta([
-        a.0[0] - b.0[0],
-        a.0[1] - b.0[1],
-        a.0[2] - b.0[2],
-        a.0[3] - b.0[3],
-    ])
-}
-
 /// `D ∈ Z[τ]` with `orient2d(a, b, c) = (sin72°/2)·D`, where
 /// `orient2d = (b − a) × (c − a)` (positive for a counter-clockwise turn in the
 /// (Re, Im) plane).
@@ -56,7 +46,7 @@ fn diff(a: ZZeta, b: ZZeta) -> ZZeta {
 /// assert_eq!(orient_value(o, one, zeta), ZTau::int(2));
 /// ```
 pub fn orient_value(a: ZZeta, b: ZZeta, c: ZZeta) -> ZTau {
-    let (p, q) = (diff(b, a), diff(c, a));
+    let (p, q) = ((b - a), (c - a));
     let (up, vp) = (p.re2(), p.im_s());
     let (uq, vq) = (q.re2(), q.im_s());
     up * vq - vp * uq
@@ -77,7 +67,7 @@ pub fn orient(a: ZZeta, b: ZZeta, c: ZZeta) -> i32 {
     // Floating-point filter on exact integer differences: `to_f64` of a point with
     // `m = Σ|n_k|` is within 2.5ε·m of its value, so the determinant below is within
     // `32ε·m_p·m_q` of the true one; decide exactly only inside that band.
-    let (p, q) = (diff(b, a), diff(c, a));
+    let (p, q) = ((b - a), (c - a));
     let ((px, py), (qx, qy)) = (p.to_f64(), q.to_f64());
     let det = px * qy - py * qx;
     let bound = 32.0 * f64::EPSILON * l1(p) * l1(q);
@@ -106,7 +96,7 @@ fn l1(x: ZZeta) -> f64 {
 /// assert_eq!(incircle_value(z(0), z(1), z(2), z(3)), ZTau::ZERO);
 /// ```
 pub fn incircle_value(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> ZTau {
-    let rows = [diff(a, d), diff(b, d), diff(c, d)].map(|p| (p.re2(), p.im_s(), p.norm2()));
+    let rows = [(a - d), (b - d), (c - d)].map(|p| (p.re2(), p.im_s(), p.norm2()));
     let [(ua, va, na), (ub, vb, nb), (uc, vc, nc)] = rows;
     // Expand along the |p|² column.
     na * (ub * vc - uc * vb) - nb * (ua * vc - uc * va) + nc * (ua * vb - ub * va)
@@ -127,7 +117,7 @@ pub fn incircle(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
     // Floating-point filter (see `orient`): with `m = max Σ|n_k|` over the three
     // differences, each entry errs by at most 2.5εm (coordinates) or 8εm² (lifts), so the
     // determinant errs by less than `256ε·m⁴`.
-    let (p, q, r) = (diff(a, d), diff(b, d), diff(c, d));
+    let (p, q, r) = ((a - d), (b - d), (c - d));
     let m = l1(p).max(l1(q)).max(l1(r));
     let lift = |x: ZZeta| {
         let (u, v) = x.to_f64();
@@ -148,7 +138,7 @@ pub fn incircle(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
 /// [`incircle`] without its floating-point filter, for callers whose own filter already
 /// failed: the zero test in `i64` when the differences are small, else the exact value.
 pub(crate) fn incircle_exact(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
-    let (p, q, r) = (diff(a, d), diff(b, d), diff(c, d));
+    let (p, q, r) = ((a - d), (b - d), (c - d));
     if l1(p).max(l1(q)).max(l1(r)) < 2048.0 && small_incircle_is_zero(p, q, r) {
         return 0;
     }

@@ -141,7 +141,7 @@ fn cells_with(
                 let mut ok = true;
                 let x = grid.zz[k];
                 grid.near(c, k, reach, |j| {
-                    let Some(b) = vectors.index(diff(grid.zz[j], x)) else {
+                    let Some(b) = vectors.index(grid.zz[j] - x) else {
                         ok = false;
                         return;
                     };
@@ -237,7 +237,7 @@ impl Local {
         grid.near(c, k, reach, |j| {
             self.pos.push(grid.pos[j]);
             self.zz.push(grid.zz[j]);
-            match vectors.index(diff(grid.zz[j], x)) {
+            match vectors.index(grid.zz[j] - x) {
                 Some(b) => self.bits.push(b),
                 None => ok = false,
             }
@@ -262,7 +262,7 @@ fn local_star(pos: &[Point], zz: &[ZZeta], bits: &[u8]) -> Option<(Box<[u8]>, f6
     for (j, &x) in zz.iter().enumerate() {
         s.push(x, j as u32);
     }
-    let first = (1..m).min_by_key(|&j| diff(zz[j as usize], zz[0]).norm2())?;
+    let first = (1..m).min_by_key(|&j| (zz[j as usize] - zz[0]).norm2())?;
     let rel = |v: u32| {
         let p = pos[v as usize];
         [p[0] - pos[0][0], p[1] - pos[0][1]]
@@ -303,10 +303,6 @@ fn local_star(pos: &[Point], zz: &[ZZeta], bits: &[u8]) -> Option<(Box<[u8]>, f6
         }
     }
     None
-}
-
-fn diff(a: ZZeta, b: ZZeta) -> ZZeta {
-    ZZeta::new([0, 1, 2, 3].map(|i| a.0[i] - b.0[i]))
 }
 
 /// Centre and radius of the circle through `a`, `b`, `c` (`None` if they are collinear).
