@@ -152,6 +152,8 @@ fn samples(a: &RenderArgs) -> Result<Samples> {
 }
 
 pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
+    // The output's format (and, for `-`, that it is no terminal) before any work.
+    super::output_format(&a.output)?;
     if a.style == Style::Phase {
         let size = a.size.unwrap_or((512, 512));
         let window = styles::PhaseWindow::centred(1.5);
