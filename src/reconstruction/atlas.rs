@@ -27,7 +27,7 @@ use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
 use super::cells::Cells;
-use super::delaunay::{LiveCells, Store};
+use super::delaunay::Store;
 use crate::lattice::{within_exact_limit, ZZeta};
 use crate::sites::Point;
 
@@ -88,10 +88,6 @@ pub(crate) fn cells(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<Ce
     Some(cells_with(positions, lattice, false)?.0)
 }
 
-fn exact(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<Cells> {
-    Some(LiveCells::grow(positions, lattice)?.cells())
-}
-
 /// The cells and how many sites were looked up (`force`: even where it does not pay).
 fn cells_with(
     positions: &[Point],
@@ -100,7 +96,7 @@ fn cells_with(
 ) -> Option<(Cells, usize)> {
     let n = lattice.len().min(positions.len());
     let (positions, lattice) = (&positions[..n], &lattice[..n]);
-    let all = || Some((exact(positions, lattice)?, 0));
+    let all = || Some((Cells::incremental(positions, lattice)?, 0));
     if n < MIN_POINTS && !force {
         return all();
     }
@@ -195,7 +191,7 @@ fn cells_with(
     let index: Vec<u32> = (0..n as u32).filter(|&i| build[i as usize]).collect();
     let pick = |i: &u32| (positions[*i as usize], lattice[*i as usize]);
     let (sub_pos, sub_zz): (Vec<Point>, Vec<Option<ZZeta>>) = index.iter().map(pick).unzip();
-    let sub = exact(&sub_pos, &sub_zz)?;
+    let sub = Cells::incremental(&sub_pos, &sub_zz)?;
     for cell in sub.iter() {
         if !decided[index[cell[0] as usize] as usize] {
             vertices.extend(cell.iter().map(|&v| index[v as usize]));
