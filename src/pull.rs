@@ -1,6 +1,7 @@
 //! A pull decoder over `std::io::Read`: previews as the bytes of a file or socket arrive.
 
-use crate::decoder::{Picture, StreamDecoder};
+use crate::container::ParserOptions;
+use crate::decoder::{thumbnail_samples, Picture, StreamDecoder};
 use crate::reconstruction::Method;
 use crate::{Error, Limits, Result};
 use std::io::Read;
@@ -20,6 +21,8 @@ pub enum Cadence {
 /// Bytes after the last level (metadata chunks) are still read and checked after the final
 /// picture: damage there ends the iteration with an error, as [`crate::decode`] reports it. A
 /// stream that ends before its header is complete yields [`crate::Error::NeedMoreData`].
+/// For a `size` much smaller than the image, [`Previews::thumbnails`] draws better pictures
+/// for less work.
 ///
 /// ```
 /// use qcs::{Cadence, Method, Previews};
@@ -39,14 +42,17 @@ pub struct Previews<R> {
     cadence: Cadence,
     method: Method,
     size: Option<(u32, u32)>,
+    limits: Limits,
+    /// Pictures are thumbnails ([`Previews::thumbnails`]).
+    thumbnail: bool,
     levels_seen: u32,
     buf: Vec<u8>,
     pos: usize,
     len: usize,
     /// Bytes pushed since the last [`Cadence::EveryBytes`] picture.
     since: usize,
-    /// Whether the final picture was yielded (the rest of the stream is only checked).
-    final_sent: bool,
+    /// Whether the last picture was yielded (the rest of the stream is only checked).
+    last_sent: bool,
     finished: bool,
 }
 
@@ -67,18 +73,50 @@ impl<R: Read> Previews<R> {
         };
         Previews {
             reader,
-            decoder: StreamDecoder::new(limits),
+            decoder: StreamDecoder::new(limits.clone()),
             cadence,
             method,
             size,
+            limits,
+            thumbnail: false,
             levels_seen: 0,
             buf: vec![0; chunk],
             pos: 0,
             len: 0,
             since: 0,
-            final_sent: false,
+            last_sent: false,
             finished: false,
         }
+    }
+
+    /// Draws every picture as a thumbnail of `size` ([`StreamDecoder::render_thumbnail`],
+    /// as [`crate::DecodeOptions::thumbnail`]): from at most the first 16 samples per output
+    /// pixel, each pixel the mean of a square rendered at its subpixel centres. Only the levels
+    /// those samples need are decoded (the rest are read and checked), and the last picture
+    /// is the first one drawn on all of them: it is [`Picture::Final`] only if that is every
+    /// sample of the file. (At the image's own size a thumbnail is the plain picture.) Call
+    /// it before the first picture; later, it still draws thumbnails but decodes every level.
+    ///
+    /// ```
+    /// use qcs::{Cadence, Method, Previews};
+    /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x ^ y) as u8])));
+    /// let bytes = qcs::encode(&img, &Default::default())?; // 2304 samples
+    /// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, Method::Gouraud, Some((6, 6)), qcs::Limits::default())
+    ///     .thumbnails()
+    ///     .collect::<Result<_, _>>()?;
+    /// let last = pics.last().unwrap().decoded();
+    /// assert_eq!((last.image.width(), last.samples_used), (6, 16 * 6 * 6));
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn thumbnails(mut self) -> Self {
+        self.thumbnail = true;
+        if self.len == 0 && !self.finished {
+            // Nothing read yet: decode only what the thumbnails draw on.
+            let (w, h) = self.size.unwrap_or((u32::MAX, u32::MAX));
+            let opts = ParserOptions::with_limits(self.limits.clone());
+            self.decoder = StreamDecoder::with_options(opts.decode_before(thumbnail_samples(w, h)));
+        }
+        self
     }
 
     /// The decoder, e.g. for its header and sample counts.
@@ -86,10 +124,30 @@ impl<R: Read> Previews<R> {
         &self.decoder
     }
 
-    fn picture(&mut self) -> Option<Result<Picture>> {
+    /// `(width, height)` of the pictures, once the header is in.
+    fn size(&self) -> Option<(u32, u32)> {
         let h = self.decoder.header()?;
-        let (w, ht) = self.size.unwrap_or((h.width, h.height));
-        Some(self.decoder.render(self.method, w, ht))
+        Some(self.size.unwrap_or((h.width, h.height)))
+    }
+
+    fn picture(&mut self) -> Option<Result<Picture>> {
+        let (w, h) = self.size()?;
+        Some(match self.thumbnail {
+            true => self.decoder.render_thumbnail(self.method, w, h),
+            false => self.decoder.render(self.method, w, h),
+        })
+    }
+
+    /// Whether every sample the pictures draw on has arrived and is verified: no later byte
+    /// can change the picture.
+    fn done(&self) -> bool {
+        match (self.thumbnail, self.size(), self.decoder.header()) {
+            (true, Some((w, h)), Some(head)) => {
+                let uses = head.total_samples.min(thumbnail_samples(w, h));
+                self.decoder.samples_verified() >= uses
+            }
+            _ => self.decoder.is_complete(),
+        }
     }
 }
 
@@ -105,7 +163,7 @@ impl<R: Read> Iterator for Previews<R> {
                 match self.reader.read(&mut self.buf) {
                     Ok(0) => {
                         self.finished = true;
-                        if self.final_sent {
+                        if self.last_sent {
                             return None;
                         }
                         return Some(self.picture().unwrap_or(Err(Error::NeedMoreData)));
@@ -132,11 +190,11 @@ impl<R: Read> Iterator for Previews<R> {
                 self.pos = self.len;
                 return Some(Err(e));
             }
-            if self.final_sent {
+            if self.last_sent {
                 continue;
             }
-            if self.decoder.is_complete() {
-                self.final_sent = true;
+            if self.done() {
+                self.last_sent = true;
                 return self.picture();
             }
             let due = match self.cadence {

@@ -299,3 +299,98 @@ fn a_decoder_capped_at_a_thumbnails_samples_draws_the_same_thumbnails() {
     assert_eq!(capped.samples_available(), cap);
     assert_eq!(capped.levels_complete(), whole.levels_complete());
 }
+
+/// `Previews::thumbnails`: the pictures `decode` draws as a thumbnail, from only the levels a
+/// thumbnail uses; the rest of the stream is still read and checked.
+#[test]
+fn previews_draw_thumbnails() {
+    let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(96, 80, |x, y| {
+        image::Rgb([(x * 3) as u8, (x ^ y) as u8 * 2, (y * 3) as u8])
+    }));
+    let bytes = encode(&img, &EncodeOptions::default()).expect("encode");
+    let n = samples(&bytes);
+    let size = (6, 5);
+    let uses = qcs::thumbnail_samples(size.0, size.1);
+    assert!(uses < n / 2, "{uses} of {n} samples");
+    let thumbs = |r: Trickle<'_>| -> Vec<Result<qcs::Picture, Error>> {
+        let p = Previews::new(
+            r,
+            Cadence::PerLevel,
+            Method::Gouraud,
+            Some(size),
+            Limits::default(),
+        );
+        p.thumbnails().collect()
+    };
+    let pics: Vec<_> = thumbs(Trickle(&bytes))
+        .into_iter()
+        .map(|p| p.expect("picture"))
+        .collect();
+    let plain = Previews::new(
+        &bytes[..],
+        Cadence::PerLevel,
+        Method::Gouraud,
+        Some(size),
+        Limits::default(),
+    );
+    assert!(
+        pics.len() >= 2 && pics.len() < plain.count(),
+        "{} pictures",
+        pics.len()
+    );
+    let used: Vec<u64> = pics.iter().map(|p| p.decoded().samples_used).collect();
+    assert!(used.windows(2).all(|w| w[0] < w[1]), "{used:?}");
+    // The last picture is the first drawn on every sample the thumbnail uses: `decode`'s
+    // thumbnail of the whole file, which is not its final picture.
+    let last = pics.last().expect("pictures");
+    assert!(!last.is_final());
+    let one = decode(
+        &bytes,
+        &DecodeOptions {
+            size: Some(size),
+            thumbnail: true,
+            ..Default::default()
+        },
+    )
+    .expect("decode");
+    assert_eq!(
+        (last.decoded().samples_used, one.samples_used),
+        (uses, uses)
+    );
+    assert!(last.decoded().image == one.image);
+    // Each preview is the thumbnail of its samples.
+    for p in &pics[..pics.len() - 1] {
+        let d = p.decoded();
+        let opts = DecodeOptions {
+            size: Some(size),
+            thumbnail: true,
+            max_samples: Some(d.samples_used),
+            ..Default::default()
+        };
+        assert!(d.image == decode(&bytes, &opts).expect("decode").image);
+    }
+    // Damage in the last level, which no thumbnail draws on, is still reported, after them.
+    let mut bad = bytes.clone();
+    let end = bad.len();
+    bad[end - 2] ^= 0x55;
+    let got = thumbs(Trickle(&bad));
+    assert_eq!(got.len(), pics.len() + 1);
+    assert!(matches!(got.last(), Some(Err(Error::Format(_)))));
+    assert!(got[pics.len() - 1]
+        .as_ref()
+        .is_ok_and(|p| p.decoded().image == one.image));
+
+    // At the image's own size a thumbnail is the plain picture.
+    let own = |thumb: bool| -> Vec<image::DynamicImage> {
+        let p = Previews::new(
+            &bytes[..],
+            Cadence::PerLevel,
+            Method::Gouraud,
+            None,
+            Limits::default(),
+        );
+        let p = if thumb { p.thumbnails() } else { p };
+        p.map(|p| p.expect("picture").into_image()).collect()
+    };
+    assert!(own(true) == own(false));
+}
