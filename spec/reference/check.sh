@@ -2,8 +2,11 @@
 # Checks the spec-only decoder (qcs_ref.py) against the conformance vectors: for every
 # spec/vectors/NAME.qcs, whole and cut to its first floor(len/2) bytes, the samples it reads
 # must equal NAME[.half].samples.csv (exactly; positions within 1e-5 px), and its first sites
-# of three image sizes must equal spec/vectors/sites-*.csv. Prints PASS/FAIL per case and
-# exits 1 on any failure. Needs python3 only.
+# of three image sizes must equal spec/vectors/sites-*.csv. Then checks the spec-only
+# picture (qcs_picture.py, spec/reconstruction.md): for every NAME.qcs, whole and half, every
+# channel of every pixel must be within +-1 of NAME[.half].png, and the worked example of
+# reconstruction.md §6 must give its three pixels. Prints PASS/FAIL per case and exits 1 on
+# any failure. Needs python3 only.
 set -u
 D=$(cd "$(dirname "$0")" && pwd)
 V="$D/../vectors"
@@ -51,5 +54,42 @@ for w, h in [(64, 64), (480, 320), (1000, 17)]:
     print("%s sites-%dx%d (%d sites)" % ("PASS" if bad == 0 else "FAIL", w, h, len(rows)))
     bad_any |= bad > 0
 sys.exit(bad_any)
+PY
+python3 - "$D" "$V" <<'PY' || fail=1
+import glob, os, sys
+sys.path.insert(0, sys.argv[1])
+import qcs_picture as qp
+bad_any = False
+for f in sorted(glob.glob(os.path.join(sys.argv[2], "*.qcs"))):
+    name = os.path.basename(f)[:-4]
+    data = open(f, "rb").read()
+    for tag, cut in ((name, len(data)), (name + ".half", len(data) // 2)):
+        w, h, ch, want = qp.read_png(open(os.path.join(sys.argv[2], tag + ".png"), "rb").read())
+        try:
+            head, got = qp.picture_of_file(data[:cut])
+        except Exception as err:
+            print("FAIL picture %s: %s: %s" % (tag, type(err).__name__, err))
+            bad_any = True
+            continue
+        if head is None or (w, h, ch) != (head.W, head.H, head.channels):
+            print("FAIL picture %s: the PNG is %dx%d with %d channels, the picture is not" % (tag, w, h, ch))
+            bad_any = True
+            continue
+        worst, off1, first = qp.compare(want, got)
+        if first is None:
+            print("PASS picture %s (max diff %d, %d pixels off by 1)" % (tag, worst, off1))
+        else:
+            print("FAIL picture %s (max diff %d): first pixel off by more than 1: "
+                  "x %d, y %d, channel %d, expected %d, got %d" % ((tag, worst) + first))
+            bad_any = True
+# reconstruction.md §6: 32x32 grey, L = 8 px, origin (16, 16) px, the five unit roots with
+# colours 0, 50, 100, 150, 200; pixels (20, 16) = 42, (16, 20) = 74, (12, 12) = 139.
+roots = [(1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1), (-1, -1, -1, -1)]
+pic = qp.picture([(n, (50 * m,)) for m, n in enumerate(roots)], 32, 32, 8 << 16, 16 << 16, 16 << 16, 1)
+got = [(x, y, pic[y][x][0]) for x, y in ((20, 16), (16, 20), (12, 12))]
+ok = got == [(20, 16, 42), (16, 20, 74), (12, 12, 139)]
+print("%s picture worked example (reconstruction.md §6: %s)"
+      % ("PASS" if ok else "FAIL", ", ".join("(%d,%d)=%d" % g for g in got)))
+sys.exit(bad_any or not ok)
 PY
 exit $fail
