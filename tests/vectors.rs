@@ -152,6 +152,16 @@ fn vectors() -> Vec<Vector> {
                 ..base(72, 8)
             },
         },
+        Vector {
+            name: "grey-8-wide",
+            what: "grey, raw 8 bits, 6 samples of a wide image (W > 4·H), L0 = 1: in the half picture \
+                   (2 samples) 116 of the 192 pixels are outside the hull (reconstruction.md §5)",
+            image: grey(48, 4),
+            opts: EncodeOptions {
+                first_level: 1,
+                ..base(6, 8)
+            },
+        },
     ]
 }
 
