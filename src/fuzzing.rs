@@ -13,7 +13,8 @@ use crate::coding::raw::{self, RawDecoder};
 use crate::container::{self, Coding, Header, Layout, Parser, ParserOptions};
 use crate::sampling::{SampleColour, SourceImage};
 use crate::sites::{Frame, Quasicrystal};
-use crate::{DecodeOptions, EncodeOptions, Error, Limits, Method, StreamDecoder};
+use crate::{Cadence, DecodeOptions, EncodeOptions, Error, Limits, Method, Previews};
+use crate::{Picture, StreamDecoder};
 
 /// The limits every harness decodes with: small images, few samples, little metadata.
 ///
@@ -194,9 +195,11 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
 /// some from the first samples only, some thumbnails; some decoders decode only the levels
 /// before a sample ([`ParserOptions::decode_before`]).
 ///
-/// Checks: a push error is final (the decoder stays poisoned); the counts never go down and
+/// Checks: a push error is final (the decoder stays poisoned); the counts never go down (but
+/// for a recovery dropping a damaged chunk's unverified samples) and
 /// match a one-shot [`crate::decode`] of the same bytes at the end; renders have the size asked
-/// for; the same file split differently gives the same result as one push.
+/// for; the same file split differently gives the same result as one push. Then reads the
+/// file with the pull decoder ([`pull`]).
 ///
 /// ```
 /// qcs::fuzzing::push(b"seed");
@@ -237,7 +240,12 @@ pub fn push(data: &[u8]) {
             );
             continue;
         }
-        assert!(dec.samples_available() >= last_avail, "available went down");
+        // Only a recovery drops samples: the unverified ones of the damaged chunk.
+        let dropped = dec.stopped().is_some() && dec.samples_available() == dec.samples_verified();
+        assert!(
+            dec.samples_available() >= last_avail || dropped,
+            "available went down"
+        );
         assert!(
             dec.samples_verified() >= last_verified,
             "verified went down"
@@ -299,6 +307,81 @@ pub fn push(data: &[u8]) {
                 (a, b) => panic!("render after a good push: {:?} / {:?}", a.err(), b.err()),
             }
         }
+    }
+    pull(
+        file,
+        &mut rng,
+        (!recover && cap.is_none()).then_some(failed),
+    );
+}
+
+/// Reads pieces of 1 to 64 bytes of a file, sizes chosen by the generator.
+struct Pieces<'a>(&'a [u8], Rng);
+
+impl std::io::Read for Pieces<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = (1 + self.1.below(64) as usize)
+            .min(buf.len())
+            .min(self.0.len());
+        buf[..n].copy_from_slice(&self.0[..n]);
+        self.0 = &self.0[n..];
+        Ok(n)
+    }
+}
+
+/// The pull decoder ([`Previews`]) on `file`, read in random pieces, at a random cadence and
+/// size, as thumbnails or not: it ends, with at most one picture per cadence step and one more;
+/// an error is its last item; pictures have the size asked for and never draw on fewer
+/// samples; and, where `strict_failed` says how a strict push of the file ended, it fails on
+/// a damaged file exactly when the push did.
+fn pull(file: &[u8], rng: &mut Rng, strict_failed: Option<bool>) {
+    let step = 1 + rng.below(256) as usize;
+    let cadence = match rng.below(2) {
+        0 => Cadence::PerLevel,
+        _ => Cadence::EveryBytes(step),
+    };
+    let size = (rng.below(2) == 0).then(|| (1 + rng.below(16) as u32, 1 + rng.below(16) as u32));
+    let method = METHODS[rng.below(3) as usize];
+    let thumbnails = rng.below(2) == 0;
+    let reader = Pieces(file, Rng(rng.next() | 1));
+    let p = Previews::new(reader, cadence, method, size, limits());
+    let p = if thumbnails { p.thumbnails() } else { p };
+    // Per level: at most a picture per level (each takes at least 5 bytes); every K bytes:
+    // one per K; plus the last, or an error.
+    let bound = match cadence {
+        Cadence::PerLevel => file.len() / 5 + 2,
+        Cadence::EveryBytes(k) => file.len() / k + 2,
+    };
+    let strict_failed = strict_failed.filter(|_| !thumbnails);
+    let (mut used, mut errored, mut count) = (0, false, 0);
+    for item in p {
+        count += 1;
+        assert!(count <= bound, "more pictures than cadence steps");
+        assert!(!errored, "an item after an error");
+        match item {
+            Ok(pic) => {
+                let d = pic.decoded();
+                if let Some((w, h)) = size {
+                    assert_eq!((d.image.width(), d.image.height()), (w, h), "output size");
+                }
+                assert!(d.samples_used >= used, "a picture drew on fewer samples");
+                assert!(!matches!(pic, Picture::Final(_)) || d.is_final);
+                used = d.samples_used;
+            }
+            Err(e) => {
+                errored = true;
+                let damaged = !matches!(e, Error::NeedMoreData);
+                if let Some(failed) = strict_failed {
+                    assert_eq!(
+                        damaged, failed,
+                        "the pull decoder fails where the push did not"
+                    );
+                }
+            }
+        }
+    }
+    if strict_failed == Some(true) {
+        assert!(errored, "the pull decoder misses the damage the push found");
     }
 }
 

@@ -589,10 +589,23 @@ fn vectors_through_every_harness() {
             let pic = qcs::fuzzing::decode(&d).expect("vector decodes");
             assert!(pic.is_final || ctl[2] & 0x80 != 0);
         }
-        for seed in [*b"abcd", *b"\0\0\0\0", *b"zzzz"] {
+        for seed in [
+            *b"abcd",
+            *b"\0\0\0\0",
+            *b"zzzz",
+            *b"pull",
+            *b"thmb",
+            *b"1234",
+        ] {
             let mut d = seed.to_vec();
             d.extend_from_slice(&file);
             qcs::fuzzing::push(&d);
+            // Damaged: the push and pull decoders must agree on it.
+            for at in [file.len() / 3, file.len() - 3] {
+                d[4 + at] ^= 0x24;
+                qcs::fuzzing::push(&d);
+                d[4 + at] ^= 0x24;
+            }
         }
         qcs::fuzzing::header(&file);
     }
