@@ -20,8 +20,8 @@ pub enum Cadence {
 ///
 /// Bytes after the last level (metadata chunks) are still read and checked after the final
 /// picture: damage there ends the iteration with an error, as [`crate::decode`] reports it. A
-/// stream that ends before its header is complete yields [`crate::Error::NeedMoreData`].
-/// For a `size` much smaller than the image, [`Previews::thumbnails`] draws better pictures
+/// stream that ends before its header is complete yields [`crate::Error::NeedMoreData`]. An
+/// error is always the last item. For a `size` much smaller than the image, [`Previews::thumbnails`] draws better pictures
 /// for less work.
 ///
 /// ```
@@ -130,12 +130,18 @@ impl<R: Read> Previews<R> {
         Some(self.size.unwrap_or((h.width, h.height)))
     }
 
+    /// The picture now; an error (e.g. an output size beyond the limits, which every later
+    /// picture would repeat) ends the iteration.
     fn picture(&mut self) -> Option<Result<Picture>> {
         let (w, h) = self.size()?;
-        Some(match self.thumbnail {
+        let r = match self.thumbnail {
             true => self.decoder.render_thumbnail(self.method, w, h),
             false => self.decoder.render(self.method, w, h),
-        })
+        };
+        if r.is_err() {
+            (self.finished, self.pos) = (true, self.len);
+        }
+        Some(r)
     }
 
     /// Whether every sample the pictures draw on has arrived and is verified: no later byte

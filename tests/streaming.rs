@@ -394,3 +394,30 @@ fn previews_draw_thumbnails() {
     };
     assert!(own(true) == own(false));
 }
+
+/// A picture that cannot be drawn (here: larger than the limits allow) ends the iteration:
+/// every later one would fail the same way.
+#[test]
+fn previews_end_at_a_render_error() {
+    let bytes = file();
+    let mut limits = Limits::default();
+    limits.max_output_pixels = 100;
+    for thumbnails in [false, true] {
+        for cadence in [Cadence::PerLevel, Cadence::EveryBytes(16)] {
+            let p = Previews::new(
+                Trickle(&bytes),
+                cadence,
+                Method::Gouraud,
+                None,
+                limits.clone(),
+            );
+            let p = if thumbnails { p.thumbnails() } else { p };
+            let items: Vec<_> = p.collect();
+            assert!(
+                matches!(items[..], [Err(Error::Limits(_))]),
+                "{cadence:?}: {} items",
+                items.len()
+            );
+        }
+    }
+}
