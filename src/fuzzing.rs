@@ -333,7 +333,7 @@ impl std::io::Read for Pieces<'_> {
 /// size, as thumbnails or not: it ends, with at most one picture per cadence step and one more;
 /// an error is its last item; pictures have the size asked for and never draw on fewer
 /// samples; and, where `strict_failed` says how a strict push of the file ended, it fails on
-/// a damaged file exactly when the push did.
+/// a damaged file exactly when the push did (at a size within the limits, not as thumbnails).
 fn pull(file: &[u8], rng: &mut Rng, strict_failed: Option<bool>) {
     let step = 1 + rng.below(256) as usize;
     let cadence = match rng.below(2) {
@@ -352,7 +352,9 @@ fn pull(file: &[u8], rng: &mut Rng, strict_failed: Option<bool>) {
         Cadence::PerLevel => file.len() / 5 + 2,
         Cadence::EveryBytes(k) => file.len() / k + 2,
     };
-    let strict_failed = strict_failed.filter(|_| !thumbnails);
+    // (Compared only at a size within the limits: the image's own may be beyond them, which
+    // is an error of the picture, not of the file.)
+    let strict_failed = strict_failed.filter(|_| !thumbnails && size.is_some());
     let (mut used, mut errored, mut count) = (0, false, 0);
     for item in p {
         count += 1;
