@@ -292,6 +292,27 @@ impl<'a> SourceImage<'a> {
     }
 }
 
+/// The prefix sums of `image − drawn` (`w × h`, `C` channels) into `sat`, `(w + 1) × (h + 1)`
+/// entries of `C`: row 0 and column 0 stay 0, every other entry is written. Row by row as
+/// slices, `C` fixed: indexing each entry cost 15% of an encode in bounds checks.
+fn residual_sums<const C: usize>(sat: &mut [i64], image: &[u8], drawn: &[u8], w: usize, h: usize) {
+    let stride = (w + 1) * C;
+    let rows = image.chunks_exact(w * C).zip(drawn.chunks_exact(w * C));
+    for (y, (image, drawn)) in rows.enumerate().take(h) {
+        let (above, below) = sat.split_at_mut((y + 1) * stride);
+        let (above, below) = (&above[y * stride + C..], &mut below[C..stride]);
+        let mut row = [0i64; C];
+        let pixels = image.chunks_exact(C).zip(drawn.chunks_exact(C));
+        let entries = below.chunks_exact_mut(C).zip(above.chunks_exact(C));
+        for ((out, up), (p, r)) in entries.zip(pixels) {
+            for k in 0..C {
+                row[k] += p[k] as i64 - r[k] as i64;
+                out[k] = up[k] + row[k];
+            }
+        }
+    }
+}
+
 /// The pixels `(x0, y0, x1, y1)` (exclusive ends) of a box of `side` centred on `p` in a
 /// `w × h` picture, within it and never empty: it holds the pixel containing `p`.
 fn around(p: Point, side: f64, w: usize, h: usize) -> (usize, usize, usize, usize) {
@@ -372,18 +393,12 @@ impl<'a> Fit<'a> {
         // Prefix sums of the residual, as those of the image in `SourceImage::new`.
         // Row 0 and column 0 stay 0; every other entry is written.
         let stride = (w + 1) * c;
-        let sat = &mut self.sat;
-        sat.resize(stride * (h + 1), 0);
-        for y in 0..h {
-            let mut row = [0i64; 4];
-            for x in 0..w {
-                for k in 0..c {
-                    let i = (y * w + x) * c + k;
-                    row[k] += self.pixels[i] as i64 - render[i] as i64;
-                    sat[(y + 1) * stride + (x + 1) * c + k] =
-                        sat[y * stride + (x + 1) * c + k] + row[k];
-                }
-            }
+        self.sat.resize(stride * (h + 1), 0);
+        match c {
+            1 => residual_sums::<1>(&mut self.sat, &self.pixels, &render, w, h),
+            2 => residual_sums::<2>(&mut self.sat, &self.pixels, &render, w, h),
+            3 => residual_sums::<3>(&mut self.sat, &self.pixels, &render, w, h),
+            _ => residual_sums::<4>(&mut self.sat, &self.pixels, &render, w, h),
         }
         let sat = &self.sat;
         let f = self.f as f64;
