@@ -376,7 +376,7 @@ fn pull(file: &[u8], rng: &mut Rng, strict_failed: Option<bool>) {
                 if let Some(failed) = strict_failed {
                     assert_eq!(
                         damaged, failed,
-                        "the pull decoder fails where the push did not"
+                        "the pull and push decoders disagree on the damage"
                     );
                 }
             }

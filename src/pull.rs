@@ -21,8 +21,8 @@ pub enum Cadence {
 /// Bytes after the last level (metadata chunks) are still read and checked after the final
 /// picture: damage there ends the iteration with an error, as [`crate::decode`] reports it. A
 /// stream that ends before its header is complete yields [`crate::Error::NeedMoreData`]. An
-/// error is always the last item. For a `size` much smaller than the image, [`Previews::thumbnails`] draws better pictures
-/// for less work.
+/// error is always the last item. For a `size` much smaller than the image,
+/// [`Previews::thumbnails`] draws better pictures for less work.
 ///
 /// ```
 /// use qcs::{Cadence, Method, Previews};
