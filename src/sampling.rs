@@ -391,7 +391,6 @@ impl<'a> Fit<'a> {
             RenderOptions::default(),
         );
         // Prefix sums of the residual, as those of the image in `SourceImage::new`.
-        // Row 0 and column 0 stay 0; every other entry is written.
         let stride = (w + 1) * c;
         self.sat.resize(stride * (h + 1), 0);
         match c {
