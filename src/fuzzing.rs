@@ -199,7 +199,7 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
 /// for a recovery dropping a damaged chunk's unverified samples) and
 /// match a one-shot [`crate::decode`] of the same bytes at the end; renders have the size asked
 /// for; the same file split differently gives the same result as one push. Then reads the
-/// file with the pull decoder ([`pull`]).
+/// file with the pull decoder, [`Previews`] (see `pull` in the source).
 ///
 /// ```
 /// qcs::fuzzing::push(b"seed");
