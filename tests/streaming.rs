@@ -312,27 +312,12 @@ fn previews_draw_thumbnails() {
     let size = (6, 5);
     let uses = qcs::thumbnail_samples(size.0, size.1);
     assert!(uses < n / 2, "{uses} of {n} samples");
-    let thumbs = |r: Trickle<'_>| -> Vec<Result<qcs::Picture, Error>> {
-        let p = Previews::new(
-            r,
-            Cadence::PerLevel,
-            Method::Gouraud,
-            Some(size),
-            Limits::default(),
-        );
-        p.thumbnails().collect()
-    };
-    let pics: Vec<_> = thumbs(Trickle(&bytes))
+    let thumbs = |b: &[u8]| -> Vec<_> { per_level(Trickle(b), Some(size), true).collect() };
+    let pics: Vec<_> = thumbs(&bytes)
         .into_iter()
         .map(|p| p.expect("picture"))
         .collect();
-    let plain = Previews::new(
-        &bytes[..],
-        Cadence::PerLevel,
-        Method::Gouraud,
-        Some(size),
-        Limits::default(),
-    );
+    let plain = per_level(&bytes[..], Some(size), false);
     assert!(
         pics.len() >= 2 && pics.len() < plain.count(),
         "{} pictures",
@@ -373,7 +358,7 @@ fn previews_draw_thumbnails() {
     let mut bad = bytes.clone();
     let end = bad.len();
     bad[end - 2] ^= 0x55;
-    let got = thumbs(Trickle(&bad));
+    let got = thumbs(&bad);
     assert_eq!(got.len(), pics.len() + 1);
     assert!(matches!(got.last(), Some(Err(Error::Format(_)))));
     assert!(got[pics.len() - 1]
@@ -382,17 +367,26 @@ fn previews_draw_thumbnails() {
 
     // At the image's own size a thumbnail is the plain picture.
     let own = |thumb: bool| -> Vec<image::DynamicImage> {
-        let p = Previews::new(
-            &bytes[..],
-            Cadence::PerLevel,
-            Method::Gouraud,
-            None,
-            Limits::default(),
-        );
-        let p = if thumb { p.thumbnails() } else { p };
+        let p = per_level(&bytes[..], None, thumb);
         p.map(|p| p.expect("picture").into_image()).collect()
     };
     assert!(own(true) == own(false));
+}
+
+/// A picture per level, Gouraud, at `size`, thumbnails or not.
+fn per_level<R: std::io::Read>(r: R, size: Option<(u32, u32)>, thumbnails: bool) -> Previews<R> {
+    let p = Previews::new(
+        r,
+        Cadence::PerLevel,
+        Method::Gouraud,
+        size,
+        Limits::default(),
+    );
+    if thumbnails {
+        p.thumbnails()
+    } else {
+        p
+    }
 }
 
 /// A picture that cannot be drawn (here: larger than the limits allow) ends the iteration:
