@@ -46,7 +46,7 @@ pub fn within_exact_limit(x: ZZeta) -> bool {
 /// assert_eq!(orient_value(o, one, zeta), ZTau::int(2));
 /// ```
 pub fn orient_value(a: ZZeta, b: ZZeta, c: ZZeta) -> ZTau {
-    let (p, q) = ((b - a), (c - a));
+    let (p, q) = (b - a, c - a);
     let (up, vp) = (p.re2(), p.im_s());
     let (uq, vq) = (q.re2(), q.im_s());
     up * vq - vp * uq
@@ -67,7 +67,7 @@ pub fn orient(a: ZZeta, b: ZZeta, c: ZZeta) -> i32 {
     // Floating-point filter on exact integer differences: `to_f64` of a point with
     // `m = Σ|n_k|` is within 2.5ε·m of its value, so the determinant below is within
     // `32ε·m_p·m_q` of the true one; decide exactly only inside that band.
-    let (p, q) = ((b - a), (c - a));
+    let (p, q) = (b - a, c - a);
     let ((px, py), (qx, qy)) = (p.to_f64(), q.to_f64());
     let det = px * qy - py * qx;
     let bound = 32.0 * f64::EPSILON * l1(p) * l1(q);
@@ -117,7 +117,7 @@ pub fn incircle(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
     // Floating-point filter (see `orient`): with `m = max Σ|n_k|` over the three
     // differences, each entry errs by at most 2.5εm (coordinates) or 8εm² (lifts), so the
     // determinant errs by less than `256ε·m⁴`.
-    let (p, q, r) = ((a - d), (b - d), (c - d));
+    let (p, q, r) = (a - d, b - d, c - d);
     let m = l1(p).max(l1(q)).max(l1(r));
     let lift = |x: ZZeta| {
         let (u, v) = x.to_f64();
@@ -138,7 +138,7 @@ pub fn incircle(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
 /// [`incircle`] without its floating-point filter, for callers whose own filter already
 /// failed: the zero test in `i64` when the differences are small, else the exact value.
 pub(crate) fn incircle_exact(a: ZZeta, b: ZZeta, c: ZZeta, d: ZZeta) -> i32 {
-    let (p, q, r) = ((a - d), (b - d), (c - d));
+    let (p, q, r) = (a - d, b - d, c - d);
     if l1(p).max(l1(q)).max(l1(r)) < 2048.0 && small_incircle_is_zero(p, q, r) {
         return 0;
     }

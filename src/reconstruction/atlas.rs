@@ -376,7 +376,6 @@ struct Grid {
 }
 
 impl Grid {
-    /// `None` if the points span no area (or too little for the buckets to make sense).
     /// The points in buckets of [`PILOT_SIDE`] mean spacings. `None` if they span no area
     /// (or too little for buckets to make sense).
     fn new(positions: &[Point], zz: &[ZZeta]) -> Option<Grid> {
@@ -568,11 +567,6 @@ mod tests {
     /// spade's triangulation, made exact, if `spade`); returns the share of the points that
     /// were looked up.
     fn check(set: &mut SampleSet, spade: bool) -> f64 {
-        let sorted = |c: &Cells| {
-            let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();
-            v.sort();
-            v
-        };
         if spade {
             let mesh = set.triangulation().clone();
             let (got, want) = (
@@ -601,6 +595,13 @@ mod tests {
         );
         assert_eq!(got.hull(), want.hull());
         decided as f64 / p.len() as f64
+    }
+
+    /// The cells, each as its vertex list, sorted.
+    fn sorted(c: &Cells) -> Vec<Vec<u32>> {
+        let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();
+        v.sort();
+        v
     }
 
     #[test]
@@ -659,12 +660,8 @@ mod tests {
             let (p, l) = scattered(&c);
             let want = Cells::incremental(&p, &l);
             let got = cells_with(&p, &l, true).map(|g| g.0);
-            let sorted = |c: Cells| {
-                let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();
-                v.sort();
-                (v, c.hull().to_vec())
-            };
-            prop_assert_eq!(got.map(sorted), want.map(sorted));
+            let key = |c: Cells| (sorted(&c), c.hull().to_vec());
+            prop_assert_eq!(got.map(key), want.map(key));
         }
     }
 }
