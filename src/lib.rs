@@ -27,6 +27,7 @@ pub mod lattice;
 pub mod limits;
 mod pull;
 pub mod reconstruction;
+mod refinement;
 pub mod sampling;
 pub mod sites;
 pub mod styles;

@@ -176,6 +176,30 @@ impl RangeEncoder {
     }
 }
 
+impl RangeEncoder {
+    /// Ends a payload whose length the decoder does not know (bytes after the last one are
+    /// unknown to it, as in a payload still arriving): writes the fewest bytes such that every
+    /// continuation of them lies in the final interval, so every bit coded is decided by the
+    /// bytes written, whatever follows them.
+    pub(crate) fn finish_open(mut self) -> Vec<u8> {
+        let hi = self.low + self.range as u64 - 1;
+        let mut keep = 4u32;
+        for z in (0..=4u32).rev() {
+            let mask = (1u64 << (8 * z)) - 1;
+            let v = (self.low + mask) & !mask;
+            if v + mask <= hi {
+                self.low = v;
+                keep = 4 - z;
+                break;
+            }
+        }
+        for _ in 0..=keep {
+            self.shift_low();
+        }
+        self.out
+    }
+}
+
 /// The decoder's state: bits out of a payload that may still be arriving.
 ///
 /// Every call names the bytes received so far and the payload length; a byte at or past the

@@ -1,0 +1,171 @@
+//! Measurements on the dev photographs (ignored tests: `cargo test --release --lib
+//! refinement::lab -- --ignored --nocapture`; `QCS_CORPUS` names the folder).
+
+use super::picture::{picture, to_planes, Source};
+use super::schedule::Pass;
+use super::wavelet::{forward, low_size, Kernel};
+use super::*;
+
+fn corpus() -> Vec<std::path::PathBuf> {
+    let dir = std::env::var("QCS_CORPUS").unwrap_or_else(|_| "../shared/corpus/dev".into());
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    v.retain(|p| p.extension().is_some_and(|e| e == "png"));
+    v.sort();
+    v
+}
+
+fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    let se: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(&x, &y)| (x as f64 - y as f64).powi(2))
+        .sum();
+    let mse = se / a.len() as f64;
+    if mse == 0.0 {
+        100.0
+    } else {
+        10.0 * (255.0f64 * 255.0 / mse).log10()
+    }
+}
+
+/// Linear weight of each pass's band and channel (its squared error in the picture per unit
+/// squared error of a coefficient).
+fn pass_weights(layout: &Layout, passes: &[Pass]) -> Vec<f64> {
+    let (_, cw) = channel_classes(layout.channels);
+    let bands = layout.bands();
+    passes
+        .iter()
+        .map(|p| {
+            let w = schedule::band_weight(layout.kernel, &bands[p.band as usize])
+                + cw[p.channel as usize];
+            2f64.powf(w as f64 / 8.0) / (1u64 << (2 * 2)) as f64
+        })
+        .collect()
+}
+
+/// For slope λ, the number of passes of a stream to keep: the point of its (bytes, gain)
+/// curve maximising gain − λ·bytes.
+fn cut_at(stream: &CodedStream, lambda: f64) -> usize {
+    let mut best = (0.0f64, 0usize);
+    let mut g = 0.0;
+    for (k, (&e, &dg)) in stream.pass_end.iter().zip(&stream.gain).enumerate() {
+        g += dg;
+        let v = g - lambda * e as f64;
+        if v > best.0 {
+            best = (v, k + 1);
+        }
+    }
+    best.1
+}
+
+#[test]
+#[ignore]
+fn rate_distortion() {
+    let budgets_bpp = [0.1, 0.25, 0.5, 1.0, 2.0];
+    let levels: u32 = std::env::var("LEVELS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(6);
+    let mut sums = vec![0.0; budgets_bpp.len()];
+    let files = corpus();
+    for path in &files {
+        let img = image::open(path).unwrap().to_rgb8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let px = img.as_raw();
+        let frac = 2;
+        let mut planes = to_planes(px, 3, frac);
+        for p in &mut planes {
+            forward(Kernel::Integer97, p, w, h, levels);
+        }
+        let layout = Layout {
+            width: w,
+            height: h,
+            channels: 3,
+            kernel: Kernel::Integer97,
+            levels,
+            top: planes.iter().map(|p| bitplanes(p)).collect(),
+        };
+        let states = layout.stream_states(Some(&planes));
+        let coded: Vec<CodedStream> = states
+            .into_iter()
+            .map(|mut st| {
+                let ws = pass_weights(&layout, &st.passes);
+                let n = st.passes.len();
+                encode_stream(&mut st, n, &ws)
+            })
+            .collect();
+        let (lw, lh) = low_size(w, h, levels);
+        let prediction = vec![vec![0; lw * lh]; 3];
+        let src = Source {
+            width: w,
+            height: h,
+            channels: 3,
+            kernel: Kernel::Integer97,
+            levels,
+            frac,
+            prediction: &prediction,
+        };
+        let mut row = Vec::new();
+        for (bi, &bpp) in budgets_bpp.iter().enumerate() {
+            let budget = bpp * (w * h) as f64 / 8.0;
+            // Bisect λ (log scale) for the largest total within the budget.
+            let (mut lo, mut hi) = (1e-6f64, 1e9f64);
+            for _ in 0..60 {
+                let mid = (lo * hi).sqrt();
+                let total: usize = coded
+                    .iter()
+                    .map(|c| {
+                        let k = cut_at(c, mid);
+                        if k == 0 {
+                            0
+                        } else {
+                            c.pass_end[k - 1]
+                        }
+                    })
+                    .sum();
+                if total as f64 > budget {
+                    lo = mid
+                } else {
+                    hi = mid
+                }
+            }
+            let cuts: Vec<usize> = coded.iter().map(|c| cut_at(c, hi)).collect();
+            let mut decs: Vec<StreamDecoder> = layout
+                .stream_states(None)
+                .into_iter()
+                .zip(&coded)
+                .zip(&cuts)
+                .map(|((st, c), &k)| {
+                    let mut d = StreamDecoder::new(st, k);
+                    let end = if k == 0 { 0 } else { c.pass_end[k - 1] };
+                    d.advance(&c.bytes[..end]);
+                    d
+                })
+                .collect();
+            let refs: Vec<Option<&bitplane::StreamState>> =
+                decs.iter_mut().map(|d| Some(&d.state)).collect();
+            let pic = picture(&src, &refs, 0);
+            let v = psnr(&pic, px);
+            row.push(v);
+            sums[bi] += v;
+        }
+        println!(
+            "{}: {}",
+            path.display(),
+            row.iter()
+                .map(|v| format!("{v:.2}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    println!(
+        "mean: {}",
+        sums.iter()
+            .map(|v| format!("{:.2}", v / files.len() as f64))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    println!("J2K:  25.16 27.97 30.75 34.31 38.72");
+}

@@ -1,0 +1,344 @@
+//! Integer lifting wavelets (spec/format.md, *Refinement: the transform*).
+//!
+//! Two kernels, both computed in integers only, so that every decoder inverts them to the same
+//! values:
+//!
+//! * [`Kernel::Reversible53`], JPEG 2000's reversible 5/3: exactly invertible, for lossless
+//!   files;
+//! * [`Kernel::Integer97`], the CDF 9/7 lifting steps with 12-bit fixed-point weights and
+//!   rounding after each step (also exactly invertible), without the final scaling of the
+//!   low and high bands: the coder orders bit-planes by each band's weight instead.
+//!
+//! A level splits a `w × h` region into its low half `⌈w/2⌉` (even samples) and high half
+//! `⌊w/2⌋` (odd samples), rows first, then columns, and the next level transforms the low-low
+//! quarter again (the Mallat layout). The signal is extended symmetrically at both ends
+//! (whole-sample symmetry), which for these symmetric lifting steps means a neighbour index
+//! past either end is clamped to the last valid one.
+
+/// A lifting kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kernel {
+    /// The reversible 5/3 (LeGall) kernel.
+    Reversible53,
+    /// The 9/7 (CDF) kernel in 12-bit fixed point.
+    Integer97,
+}
+
+/// The 9/7 lifting weights, times 4096 and rounded: α, β, γ, δ.
+pub(crate) const W97: [i32; 4] = [-6497, -217, 3616, 1817];
+
+#[derive(Clone, Copy)]
+enum Step {
+    /// 5/3 predict: `d −= (a + b) >> 1`.
+    Predict53,
+    /// 5/3 update: `s += (a + b + 2) >> 2`.
+    Update53,
+    /// 9/7: `x += (c·(a + b) + 2048) >> 12`.
+    Fixed(i32),
+}
+
+impl Step {
+    #[inline(always)]
+    fn delta(self, a: i32, b: i32) -> i32 {
+        match self {
+            Step::Predict53 => -((a + b) >> 1),
+            Step::Update53 => (a + b + 2) >> 2,
+            Step::Fixed(c) => ((c as i64 * (a as i64 + b as i64) + 2048) >> 12) as i32,
+        }
+    }
+}
+
+/// The lifting steps of a kernel, in forward order; `true` for an update step (low band
+/// from its high neighbours), `false` for a predict step (high band from its low neighbours).
+fn steps(kernel: Kernel) -> &'static [(bool, Step)] {
+    match kernel {
+        Kernel::Reversible53 => &[(false, Step::Predict53), (true, Step::Update53)],
+        Kernel::Integer97 => &[
+            (false, Step::Fixed(W97[0])),
+            (true, Step::Fixed(W97[1])),
+            (false, Step::Fixed(W97[2])),
+            (true, Step::Fixed(W97[3])),
+        ],
+    }
+}
+
+/// Applies one lifting step to the two halves of a 1-D signal: `s` (low, `⌈n/2⌉`) and `d`
+/// (high, `⌊n/2⌋ ≥ 1`), adding (`sign = 1`) or subtracting (`-1`) the step's delta.
+#[inline(always)]
+fn lift_1d(update: bool, step: Step, s: &mut [i32], d: &mut [i32], sign: i32) {
+    let (nl, nh) = (s.len(), d.len());
+    if update {
+        // s[i] ±= f(d[i − 1], d[i]), indices clamped to 0..nh.
+        s[0] += sign * step.delta(d[0], d[0]);
+        for i in 1..nl {
+            let a = d[i - 1];
+            let b = d[i.min(nh - 1)];
+            s[i] += sign * step.delta(a, b);
+        }
+    } else {
+        // d[i] ±= f(s[i], s[i + 1]), indices clamped to 0..nl.
+        for i in 0..nh {
+            let a = s[i];
+            let b = s[(i + 1).min(nl - 1)];
+            d[i] += sign * step.delta(a, b);
+        }
+    }
+}
+
+/// The same step on whole rows: `s_rows` and `d_rows` hold `nl` and `nh` rows of `width`
+/// values each.
+fn lift_rows(
+    update: bool,
+    step: Step,
+    s_rows: &mut [i32],
+    d_rows: &mut [i32],
+    width: usize,
+    sign: i32,
+) {
+    let nl = s_rows.len() / width;
+    let nh = d_rows.len() / width;
+    if update {
+        for i in 0..nl {
+            let (ia, ib) = (i.saturating_sub(1), i.min(nh - 1));
+            let target = &mut s_rows[i * width..(i + 1) * width];
+            let a = &d_rows[ia * width..(ia + 1) * width];
+            let b = &d_rows[ib * width..(ib + 1) * width];
+            for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
+                *t += sign * step.delta(x, y);
+            }
+        }
+    } else {
+        for i in 0..nh {
+            let ib = (i + 1).min(nl - 1);
+            let target = &mut d_rows[i * width..(i + 1) * width];
+            let a = &s_rows[i * width..(i + 1) * width];
+            let b = &s_rows[ib * width..(ib + 1) * width];
+            for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
+                *t += sign * step.delta(x, y);
+            }
+        }
+    }
+}
+
+/// Forward transform of one row in place: the result is the low half then the high half.
+fn forward_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
+    let n = row.len();
+    if n < 2 {
+        return;
+    }
+    let nl = n.div_ceil(2);
+    tmp.clear();
+    tmp.extend(row.iter().step_by(2));
+    tmp.extend(row.iter().skip(1).step_by(2));
+    let (s, d) = tmp.split_at_mut(nl);
+    for &(update, step) in steps(kernel) {
+        lift_1d(update, step, s, d, 1);
+    }
+    row.copy_from_slice(tmp);
+}
+
+/// Inverse of [`forward_row`].
+fn inverse_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
+    let n = row.len();
+    if n < 2 {
+        return;
+    }
+    let nl = n.div_ceil(2);
+    tmp.clear();
+    tmp.extend_from_slice(row);
+    let (s, d) = tmp.split_at_mut(nl);
+    for &(update, step) in steps(kernel).iter().rev() {
+        lift_1d(update, step, s, d, -1);
+    }
+    for (i, &v) in s.iter().enumerate() {
+        row[2 * i] = v;
+    }
+    for (i, &v) in d.iter().enumerate() {
+        row[2 * i + 1] = v;
+    }
+}
+
+/// Forward transform of the columns of the region `width × rows` (stride `stride`) in place.
+fn forward_columns(
+    kernel: Kernel,
+    plane: &mut [i32],
+    stride: usize,
+    width: usize,
+    rows: usize,
+    tmp: &mut Vec<i32>,
+) {
+    if rows < 2 {
+        return;
+    }
+    let nl = rows.div_ceil(2);
+    tmp.clear();
+    for y in (0..rows).step_by(2).chain((1..rows).step_by(2)) {
+        tmp.extend_from_slice(&plane[y * stride..y * stride + width]);
+    }
+    let (s, d) = tmp.split_at_mut(nl * width);
+    for &(update, step) in steps(kernel) {
+        lift_rows(update, step, s, d, width, 1);
+    }
+    for (y, row) in tmp.chunks_exact(width).enumerate() {
+        plane[y * stride..y * stride + width].copy_from_slice(row);
+    }
+}
+
+/// Inverse of [`forward_columns`].
+fn inverse_columns(
+    kernel: Kernel,
+    plane: &mut [i32],
+    stride: usize,
+    width: usize,
+    rows: usize,
+    tmp: &mut Vec<i32>,
+) {
+    if rows < 2 {
+        return;
+    }
+    let nl = rows.div_ceil(2);
+    tmp.clear();
+    for y in 0..rows {
+        tmp.extend_from_slice(&plane[y * stride..y * stride + width]);
+    }
+    let (s, d) = tmp.split_at_mut(nl * width);
+    for &(update, step) in steps(kernel).iter().rev() {
+        lift_rows(update, step, s, d, width, -1);
+    }
+    for (k, row) in tmp.chunks_exact(width).enumerate() {
+        let y = if k < nl { 2 * k } else { 2 * (k - nl) + 1 };
+        plane[y * stride..y * stride + width].copy_from_slice(row);
+    }
+}
+
+/// The size of the low-low region after `levels` levels of a `w × h` region.
+pub(crate) fn low_size(w: usize, h: usize, levels: u32) -> (usize, usize) {
+    let mut s = (w, h);
+    for _ in 0..levels {
+        s = (s.0.div_ceil(2), s.1.div_ceil(2));
+    }
+    s
+}
+
+/// Forward transform, `levels` levels, of a `w × h` plane (row stride `w`) in place.
+pub(crate) fn forward(kernel: Kernel, plane: &mut [i32], w: usize, h: usize, levels: u32) {
+    let mut tmp = Vec::new();
+    for l in 0..levels {
+        let (cw, ch) = low_size(w, h, l);
+        for y in 0..ch {
+            forward_row(kernel, &mut plane[y * w..y * w + cw], &mut tmp);
+        }
+        forward_columns(kernel, plane, w, cw, ch, &mut tmp);
+    }
+}
+
+/// Inverse transform of levels `levels − 1` down to `stop` (0 for the whole picture): the
+/// top-left `low_size(w, h, stop)` region then holds the low-low band of level `stop`.
+pub(crate) fn inverse(
+    kernel: Kernel,
+    plane: &mut [i32],
+    w: usize,
+    h: usize,
+    levels: u32,
+    stop: u32,
+) {
+    let mut tmp = Vec::new();
+    for l in (stop..levels).rev() {
+        let (cw, ch) = low_size(w, h, l);
+        inverse_columns(kernel, plane, w, cw, ch, &mut tmp);
+        for y in 0..ch {
+            inverse_row(kernel, &mut plane[y * w..y * w + cw], &mut tmp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn lcg(s: &mut u64) -> i32 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*s >> 33) % 1021) as i32 - 510
+    }
+
+    #[test]
+    fn inverse_undoes_forward_for_every_small_size() {
+        let mut seed = 1;
+        for kernel in [Kernel::Reversible53, Kernel::Integer97] {
+            for w in 1..=13 {
+                for h in 1..=9 {
+                    for levels in 0..=4 {
+                        let orig: Vec<i32> = (0..w * h).map(|_| lcg(&mut seed)).collect();
+                        let mut p = orig.clone();
+                        forward(kernel, &mut p, w, h, levels);
+                        inverse(kernel, &mut p, w, h, levels, 0);
+                        assert_eq!(p, orig, "{kernel:?} {w}x{h} levels {levels}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_constant_lands_in_the_low_band_only() {
+        // 5/3 keeps a constant's value in the low band (DC gain 1) and leaves zero details;
+        // the 9/7 steps without their final scaling multiply it by about 1.23 per dimension.
+        let (w, h) = (37, 22);
+        for (kernel, gain) in [(Kernel::Reversible53, 1.0), (Kernel::Integer97, 1.2302f64)] {
+            let mut p = vec![400; w * h];
+            forward(kernel, &mut p, w, h, 2);
+            let (lw, lh) = low_size(w, h, 2);
+            for y in 0..h {
+                for x in 0..w {
+                    let v = p[y * w + x];
+                    if x < lw && y < lh {
+                        let want = 400.0 * gain.powi(4);
+                        assert!((v as f64 - want).abs() <= 3.0, "{kernel:?} {v} vs {want}");
+                    } else {
+                        assert!(v.abs() <= 1, "{kernel:?} detail {v} at ({x}, {y})");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_partial_inverse_leaves_the_coarser_picture() {
+        // Stopping the inverse at level 1 leaves exactly the level-1 low band of the forward
+        // transform: what a thumbnail decoder draws from.
+        let (w, h) = (29, 17);
+        let mut seed = 5;
+        let orig: Vec<i32> = (0..w * h).map(|_| lcg(&mut seed)).collect();
+        for kernel in [Kernel::Reversible53, Kernel::Integer97] {
+            let mut one = orig.clone();
+            forward(kernel, &mut one, w, h, 1);
+            let mut three = orig.clone();
+            forward(kernel, &mut three, w, h, 3);
+            inverse(kernel, &mut three, w, h, 3, 1);
+            let (lw, lh) = low_size(w, h, 1);
+            for y in 0..lh {
+                assert_eq!(one[y * w..y * w + lw], three[y * w..y * w + lw]);
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn round_trip_of_arbitrary_planes(
+            w in 1usize..40, h in 1usize..40, levels in 0u32..6, seed in any::<u64>(), big in any::<bool>()
+        ) {
+            let mut s = seed;
+            let scale = if big { 64 } else { 1 };
+            let orig: Vec<i32> = (0..w * h).map(|_| lcg(&mut s) * scale).collect();
+            for kernel in [Kernel::Reversible53, Kernel::Integer97] {
+                let mut p = orig.clone();
+                forward(kernel, &mut p, w, h, levels);
+                inverse(kernel, &mut p, w, h, levels, 0);
+                prop_assert_eq!(&p, &orig);
+            }
+        }
+    }
+}
