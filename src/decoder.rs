@@ -8,6 +8,7 @@ use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
 };
 use crate::reconstruction::{Method, SampleSet};
+use crate::refinement::decode::RefinementDecoder;
 use crate::sites::{Frame, FrameError, Quasicrystal, Site};
 use crate::{Error, Limits, Result};
 use image::DynamicImage;
@@ -23,8 +24,13 @@ pub struct DecodedImage {
     pub samples_verified: u64,
     /// Levels received completely and verified, among those the picture was rendered from.
     pub levels_complete: u32,
-    /// Whether this is the final picture: every sample of the file, all verified.
+    /// Whether this is the final picture: every sample and refinement layer of the file, all
+    /// verified.
     pub is_final: bool,
+    /// Whether the picture is the refinement's (version 3, once its first layer has begun):
+    /// drawn on the pixel grid from the wavelet coefficients received, the levels' samples
+    /// predicting the coarsest band.
+    pub refined: bool,
     /// The file's ICC colour profile, if it has one and its chunk (after the first level) was
     /// received and verified: the colour space the pixels are in. `None` means sRGB.
     pub icc: Option<Vec<u8>>,
@@ -103,6 +109,12 @@ pub struct StreamDecoder {
     /// Set when `push` returned an error: the events after it were not applied, so the state
     /// no longer follows the parser and every further `push` must fail.
     failed: bool,
+    /// The refinement (version 3), once its header has arrived and if every level is decoded.
+    refinement: Option<RefinementDecoder>,
+    /// Refinement layers received and verified.
+    layers_complete: u32,
+    /// Decode only the refinement streams a picture of this size needs (`None`: all).
+    size_hint: Option<(u32, u32)>,
 }
 
 impl StreamDecoder {
@@ -151,6 +163,9 @@ impl StreamDecoder {
             decode_limit,
             skipping: false,
             failed: false,
+            refinement: None,
+            layers_complete: 0,
+            size_hint: None,
         }
     }
 
@@ -285,9 +300,50 @@ impl StreamDecoder {
                 self.colours.truncate(self.verified as usize * c);
                 self.unpacker = None;
                 self.stopped = Some(error.clone());
+                if let Some(r) = &mut self.refinement {
+                    r.drop_unverified();
+                }
             }
             Event::Metadata { metadata, .. } => self.metadata.push(metadata.clone()),
-            Event::LevelsComplete | Event::Skipped { .. } => {}
+            Event::RefinementHeader(r) => {
+                let h = self.header.clone().expect("header precedes the refinement");
+                // The refinement draws on every level; a decoder capped below them (a
+                // thumbnail of a level-only preview) leaves it.
+                if self.sample_count() == h.total_samples {
+                    let n = h.total_samples as usize;
+                    let frame = self.seq.expect("sites imply a header").frame();
+                    let positions: Vec<[i64; 2]> = self
+                        .sites_to(n)
+                        .iter()
+                        .map(|s| fixed_position(&frame, s.lattice))
+                        .collect();
+                    let mut dec = RefinementDecoder::new(
+                        r,
+                        h.width,
+                        h.height,
+                        self.channels(),
+                        &positions,
+                        &self.colours,
+                        usize::MAX,
+                    );
+                    if let Some((w, ht)) = self.size_hint {
+                        dec.keep_streams_for(w, ht);
+                    }
+                    self.refinement = Some(dec);
+                }
+            }
+            Event::RefinementData { stream, bytes, .. } => {
+                if let Some(r) = &mut self.refinement {
+                    r.push(*stream as usize, bytes);
+                }
+            }
+            Event::LayerVerified { .. } => {
+                self.layers_complete += 1;
+                if let Some(r) = &mut self.refinement {
+                    r.verify();
+                }
+            }
+            Event::LevelsComplete | Event::Skipped { .. } | Event::LayerStart { .. } => {}
         }
         Ok(())
     }
@@ -322,12 +378,30 @@ impl StreamDecoder {
         self.levels_complete
     }
 
-    /// Whether every level of the file has arrived and is verified (with
-    /// [`ParserOptions::decode_before`], those past it are verified but not decoded).
+    /// Whether every level (and every refinement layer) of the file has arrived and is
+    /// verified (with [`ParserOptions::decode_before`], those past it are verified but not
+    /// decoded).
     pub fn is_complete(&self) -> bool {
-        self.header
-            .as_ref()
-            .is_some_and(|h| self.levels_complete == h.level_count())
+        self.header.as_ref().is_some_and(|h| {
+            self.levels_complete == h.level_count()
+                && (!h.refinement
+                    || self
+                        .parser
+                        .refinement()
+                        .is_some_and(|r| self.layers_complete == r.layers))
+        })
+    }
+
+    /// Refinement layers received completely and verified.
+    pub fn layers_complete(&self) -> u32 {
+        self.layers_complete
+    }
+
+    /// Decode only the refinement streams that a picture of `width × height` needs: a
+    /// decoder that only ever renders that small skips the rest of the refinement.
+    pub(crate) fn with_size_hint(mut self, width: u32, height: u32) -> Self {
+        self.size_hint = Some((width, height));
+        self
     }
 
     /// In recovery mode, the error that stopped decoding (everything verified before it is kept).
@@ -412,6 +486,15 @@ impl StreamDecoder {
     ) -> Result<Picture> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
+        if k >= h.total_samples {
+            if let Some(d) = self.render_refined(&h, width, height) {
+                return Ok(if d.is_final {
+                    Picture::Final(d)
+                } else {
+                    Picture::Preview(d)
+                });
+            }
+        }
         let n = self.sample_count().min(k);
         let c = self.channels();
         // A kept set with more samples than asked for now (a recovery dropped a damaged
@@ -432,7 +515,8 @@ impl StreamDecoder {
             samples_used: n,
             samples_verified: self.verified.min(n),
             levels_complete: self.levels_within(&h, n),
-            is_final: n == h.total_samples && self.is_complete(),
+            is_final: n == h.total_samples && self.is_complete() && !h.refinement,
+            refined: false,
             icc: self.icc_profile().map(<[u8]>::to_vec),
         };
         Ok(if decoded.is_final {
@@ -459,12 +543,33 @@ impl StreamDecoder {
     /// ```
     pub fn render_thumbnail(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
         self.check_output_size(width, height)?;
+        if self.refinement.is_some() {
+            // The refinement's picture at a smaller size is already the mean over each pixel.
+            return self.render(method, width, height);
+        }
         let k = self.sample_count().min(thumbnail_samples(width, height));
         let f = thumbnail_factor(k, width, height, &self.limits);
         let pic = self.render_first(k, method, width * f, height * f)?;
         Ok(match pic {
             Picture::Preview(d) => Picture::Preview(shrink(d, f)),
             Picture::Final(d) => Picture::Final(shrink(d, f)),
+        })
+    }
+
+    /// The refinement's picture, once its header has arrived.
+    fn render_refined(&mut self, h: &Header, width: u32, height: u32) -> Option<DecodedImage> {
+        let complete = self.is_complete();
+        let icc = self.icc_profile().map(<[u8]>::to_vec);
+        let r = self.refinement.as_mut()?;
+        let pixels = r.render(width, height);
+        Some(DecodedImage {
+            image: to_image(h.layout, width, height, pixels),
+            samples_used: h.total_samples,
+            samples_verified: self.verified,
+            levels_complete: self.levels_complete,
+            is_final: complete,
+            refined: true,
+            icc,
         })
     }
 
@@ -517,6 +622,11 @@ impl StreamDecoder {
     ) -> Result<DecodedImage> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
+        if k >= h.total_samples {
+            if let Some(d) = self.render_refined(&h, width, height) {
+                return Ok(d);
+            }
+        }
         self.predictive = None;
         self.set = None;
         let c = self.channels();
@@ -543,7 +653,8 @@ impl StreamDecoder {
             samples_used: used,
             samples_verified: verified.min(used),
             levels_complete: levels,
-            is_final: used == h.total_samples && verified == h.total_samples,
+            is_final: used == h.total_samples && verified == h.total_samples && !h.refinement,
+            refined: false,
             icc,
         })
     }
@@ -708,12 +819,15 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
             .recover(opts.recover)
             .decode_before(max_samples),
     );
+    if let Some((w, h)) = opts.size {
+        dec = dec.with_size_hint(w, h);
+    }
     let build_cells = opts.method == Method::Gouraud && rayon::current_num_threads() > 1;
     let seed = push_whole(&mut dec, bytes, max_samples, build_cells)?;
     let h = dec.header().cloned().ok_or(Error::NeedMoreData)?;
     let (w, ht) = opts.size.unwrap_or((h.width, h.height));
     let k = max_samples.min(dec.samples_available());
-    if !opts.thumbnail {
+    if !opts.thumbnail || dec.refinement.is_some() {
         return dec.render_prefix(k, opts.method, w, ht, seed);
     }
     dec.check_output_size(w, ht)?;

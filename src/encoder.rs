@@ -1,13 +1,33 @@
 //! Image → `.qcs` bytes: sites, sample colours, colour coding, container.
 
 use crate::coding::predictive::{fixed_position, Params, PredictiveEncoder};
-use crate::container::{Coding, ContainerWriter, Header, LatticeFields, Layout};
+use crate::container::{Coding, ContainerWriter, Header, LatticeFields, Layout, Wavelet};
+use crate::refinement::encode::{self as refine, Goal};
 use crate::sampling::{SampleColour, SourceImage};
 use crate::sites::{Frame, Quasicrystal};
 use crate::{Error, Result};
 use image::DynamicImage;
 use std::borrow::Cow;
 use std::io::Write;
+
+/// What the file aims at: how faithful its whole is, or how large.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Target {
+    /// A quality from 0 (the smallest files) to 100 (nearly lossless), as cjpeg's and
+    /// cwebp's: the refinement codes every bit-plane worth more than the quality allows.
+    Quality(u8),
+    /// Exactly the input's pixels (every channel, alpha included).
+    Lossless,
+    /// The best picture the file can give in this many bytes (the whole file, at least its
+    /// levels).
+    Size(u64),
+    /// No refinement: the quasicrystal levels only (a format version 2 file), their fidelity
+    /// set by [`EncodeOptions::coding`].
+    LevelsOnly,
+}
+
+/// The quality of [`EncodeOptions::default`] and `qcs encode`.
+pub const DEFAULT_QUALITY: u8 = 85;
 
 /// How to encode an image.
 ///
@@ -20,7 +40,10 @@ use std::io::Write;
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodeOptions {
-    /// Total samples N; `None` uses `density`.
+    /// What the file aims at (default: quality [`DEFAULT_QUALITY`]).
+    pub target: Target,
+    /// Samples in the levels N; `None` uses `density` for [`Target::LevelsOnly`], and the
+    /// encoder's choice (a first level of 64) with a refinement.
     pub samples: Option<u64>,
     /// Samples per pixel when `samples` is `None` (default 1/4): N = ⌊W·H·density⌋, at least 1
     /// and at most 2^22, the default [`Limits::max_samples`](crate::Limits::max_samples), so
@@ -28,7 +51,8 @@ pub struct EncodeOptions {
     /// the default density gives fewer samples per pixel; set `samples` for more). A multiple
     /// of 1/256 is stored in one header byte.
     pub density: f64,
-    /// The colour coding (default: predictive at quality
+    /// The levels' colour coding (default: predictive at quality 40, for the smallest
+    /// previews; a file with levels only wants more, e.g.
     /// [`DEFAULT_QUALITY`](crate::coding::predictive::DEFAULT_QUALITY)).
     pub coding: Coding,
     /// What a sample's colour is.
@@ -48,9 +72,10 @@ pub struct EncodeOptions {
 impl Default for EncodeOptions {
     fn default() -> Self {
         EncodeOptions {
+            target: Target::Quality(DEFAULT_QUALITY),
             samples: None,
             density: 0.25,
-            coding: crate::coding::predictive::Params::default().coding(),
+            coding: Params::from_quality(BASE_QUALITY).coding(),
             colour: SampleColour::default(),
             first_level: crate::container::DEFAULT_FIRST_LEVEL,
             frame: None,
@@ -64,13 +89,31 @@ impl EncodeOptions {
     /// The sample count N these options give for a `width × height` image (1 ≤ N ≤ W·H).
     pub fn sample_count(&self, width: u32, height: u32) -> u64 {
         let px = width as u64 * height as u64;
-        let n = match self.samples {
-            Some(n) => n,
-            None => ((self.density * px as f64).floor() as u64)
+        let n = match (self.samples, self.target) {
+            (Some(n), _) => n,
+            (None, Target::LevelsOnly) => ((self.density * px as f64).floor() as u64)
                 .min(crate::Limits::default().max_samples),
+            (None, _) => BASE_SAMPLES,
         };
         n.clamp(1, px.max(1))
     }
+}
+
+/// Samples in the levels before a refinement, unless told otherwise: one level, whose first
+/// bytes are the smallest previews (about 20 samples in 32 bytes).
+const BASE_SAMPLES: u64 = 64;
+
+/// The levels' quality before a refinement: coarse colours, so that the first bytes hold
+/// many samples.
+const BASE_QUALITY: u8 = 40;
+
+/// The key (sixteenths of a bit-plane, spec/format.md) below which a refinement at `quality`
+/// codes no pass.
+pub(crate) fn quality_key(quality: u8) -> i32 {
+    let q = quality.min(100) as i32;
+    // Quality 100 stops at the fraction bits (just above bit-plane 2 of the 9/7 at F = 2);
+    // each 12.5 quality points lower halve the precision (16 sixteenths a bit-plane).
+    40 + (100 - q) * 16 / 8
 }
 
 /// The layout qcs stores for an image, and its pixels in that layout (borrowed when the
@@ -121,17 +164,18 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             "the first level must hold at least one sample".into(),
         ));
     }
+    let refined = opts.target != Target::LevelsOnly;
     let n = opts.sample_count(width, height);
     let (layout, pixels) = layout_and_pixels(image);
     let channels = layout.channels() as usize;
-    let mut header = Header::new(
-        width,
-        height,
-        layout,
-        n,
-        opts.first_level,
-        opts.coding.clone(),
-    );
+    // With a refinement the levels are short: one level unless told otherwise.
+    let first_level = if refined && opts.samples.is_none() {
+        n
+    } else {
+        opts.first_level
+    };
+    let mut header = Header::new(width, height, layout, n, first_level, opts.coding.clone());
+    header.refinement = refined;
     if opts.frame.is_some() {
         header.lattice = Some(LatticeFields {
             root_length: frame.root_len,
@@ -141,32 +185,42 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
     }
     let sites = seq.first(n as usize);
     let positions: Vec<_> = sites.iter().map(|s| s.pos).collect();
+    let fixed: Vec<[i64; 2]> = sites
+        .iter()
+        .map(|s| fixed_position(&frame, s.lattice))
+        .collect();
     let mut predictive = match &opts.coding {
-        Coding::Predictive { step } => Some((
-            PredictiveEncoder::new(Params { step: *step }, channels as u8, width, height)?,
-            sites
-                .iter()
-                .map(|s| fixed_position(&frame, s.lattice))
-                .collect::<Vec<_>>(),
-        )),
+        Coding::Predictive { step } => Some(PredictiveEncoder::new(
+            Params { step: *step },
+            channels as u8,
+            width,
+            height,
+        )?),
         Coding::Raw { .. } => None,
     };
     let source = SourceImage::new(&pixels, width, height, channels)?;
     let colours = match opts.colour {
         SampleColour::Fitted => {
-            let first = usize::try_from(opts.first_level).unwrap_or(usize::MAX);
+            let first = usize::try_from(first_level).unwrap_or(usize::MAX);
             source.fitted(&sites, seq.frame(), first, n as usize)
         }
         rule => source.colours(&positions, rule, n as usize),
     };
     let mut w = ContainerWriter::new(writer, &header)?;
+    // The colours a decoder reads back, which the refinement's prediction starts from.
+    let mut decoded = Vec::with_capacity(colours.len());
     for k in 0..header.level_count() {
         let range = header.level_range(k).expect("level below level_count");
         let values = &colours[range.start as usize * channels..range.end as usize * channels];
         let payload = match &opts.coding {
-            Coding::Raw { bits } => crate::coding::raw::pack(values, *bits)?,
+            Coding::Raw { bits } => {
+                decoded.extend(values.iter().map(|&v| {
+                    crate::coding::raw::dequantise(crate::coding::raw::quantise(v, *bits), *bits)
+                }));
+                crate::coding::raw::pack(values, *bits)?
+            }
             Coding::Predictive { .. } => match &mut predictive {
-                Some((enc, fixed)) => {
+                Some(enc) => {
                     enc.encode_level(&fixed[range.start as usize..range.end as usize], values)?
                 }
                 None => unreachable!("predictive state exists for the predictive coding"),
@@ -180,6 +234,33 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             for (key, value) in &opts.text {
                 w.write_text(key, value)?;
             }
+        }
+    }
+    if refined {
+        if let Some(enc) = &predictive {
+            decoded = enc.reconstructed();
+        }
+        let (kernel, frac, goal) = match opts.target {
+            Target::Lossless => (Wavelet::Reversible53, 0, Goal::Lossless),
+            Target::Quality(q) => (Wavelet::Integer97, 2, Goal::Key(quality_key(q))),
+            Target::Size(bytes) => {
+                let used = w.bytes_written();
+                let room = usize::try_from(bytes.saturating_sub(used)).unwrap_or(usize::MAX);
+                (Wavelet::Integer97, 2, Goal::Bytes(room))
+            }
+            Target::LevelsOnly => unreachable!("no refinement"),
+        };
+        let params = refine::Params {
+            kernel,
+            frac,
+            levels: refine::default_levels(width, height),
+            goal,
+            first_layer: 64,
+        };
+        let coded = refine::encode(&pixels, width, height, channels, &fixed, &decoded, params);
+        for layer in &coded.layers {
+            let segs: Vec<&[u8]> = layer.iter().map(Vec::as_slice).collect();
+            w.write_layer(&coded.header, &segs)?;
         }
     }
     w.finish()?;

@@ -35,7 +35,7 @@ pub mod styles;
 mod testing;
 
 pub use decoder::{decode, thumbnail_samples, DecodeOptions, DecodedImage, Picture, StreamDecoder};
-pub use encoder::{encode, encode_to, EncodeOptions};
+pub use encoder::{encode, encode_to, EncodeOptions, Target, DEFAULT_QUALITY};
 pub use error::{Error, Result};
 pub use integration::{register_image_hooks, QcsImageDecoder};
 pub use limits::Limits;

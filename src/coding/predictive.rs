@@ -539,6 +539,25 @@ fn code_residual<B: BitIo>(
     Some(if neg { -v } else { v })
 }
 
+/// Inverse squared distance weights of neighbours given as (squared distance, index):
+/// 2^62 / (d² + 2^12), each at most 2^50, so with values within ±255 a weighted sum stays
+/// under 2^61 in i64. Also their sum.
+pub(crate) fn weights(nbrs: &[(i64, u32)]) -> ([i64; NEIGHBOURS], i64) {
+    let mut w = [0i64; NEIGHBOURS];
+    let mut wsum = 0i64;
+    for (k, &(d2, _)) in nbrs.iter().enumerate() {
+        w[k] = (1i64 << 62) / d2.saturating_add(1 << 12);
+        wsum += w[k];
+    }
+    (w, wsum)
+}
+
+/// The prediction from a weighted sum `acc` of values and the sum of the weights:
+/// `floor((acc + floor(W/2)) / W)`.
+pub(crate) fn weighted_mean(acc: i64, wsum: i64) -> i32 {
+    (acc + wsum / 2).div_euclid(wsum) as i32
+}
+
 /// The shared closed-loop state of encoder and decoder.
 #[derive(Clone, Debug)]
 struct State {
@@ -580,14 +599,7 @@ impl State {
     ) -> Option<()> {
         let c = self.layout_channels;
         self.pred.nearest_to_next(&mut self.nbrs);
-        // Inverse squared distance weights, 2^62 / (d² + 2^12): each at most 2^50, so with
-        // values within ±255 the weighted sum below stays under 2^61 in i64.
-        let mut w = [0i64; NEIGHBOURS];
-        let mut wsum = 0i64;
-        for (k, &(d2, _)) in self.nbrs.iter().enumerate() {
-            w[k] = (1i64 << 62) / d2.saturating_add(1 << 12);
-            wsum += w[k];
-        }
+        let (w, wsum) = weights(&self.nbrs);
         let per_channel = ACT * LUMA_CLASSES * PER_CTX + ACT * MANT_PER_ACT;
         let mut luma_class = 0;
         for ch in 0..c {
@@ -603,7 +615,7 @@ impl State {
                     mn = mn.min(v);
                     mx = mx.max(v);
                 }
-                let pr = (acc + wsum / 2).div_euclid(wsum) as i32;
+                let pr = weighted_mean(acc, wsum);
                 (pr, mx - mn)
             };
             let act = bitlen((spread / step) as u32).min(ACT - 1);

@@ -286,7 +286,13 @@ impl RawDecoder {
                     self.colours
                         .truncate(self.verified as usize * self.channels);
                 }
-                Event::LevelsComplete | Event::Skipped { .. } => {}
+                // The raw coding's decoder reads the levels only.
+                Event::LevelsComplete
+                | Event::Skipped { .. }
+                | Event::LayerStart { .. }
+                | Event::RefinementHeader(_)
+                | Event::RefinementData { .. }
+                | Event::LayerVerified { .. } => {}
             }
         }
         result

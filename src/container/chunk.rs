@@ -5,6 +5,8 @@ use super::varint;
 
 /// `L`: the next level's colour data (critical).
 pub const LEVEL: u8 = b'L';
+/// `R`: a layer of the refinement (critical; version 3).
+pub const REFINEMENT: u8 = b'R';
 /// `i`: an ICC profile, raw bytes (ancillary).
 pub const ICC: u8 = b'i';
 /// `t`: a text comment, UTF-8 `key`, 0x00, UTF-8 `value` (ancillary).

@@ -6,8 +6,11 @@ use std::ops::Range;
 
 /// The magic bytes every `.qcs` file starts with.
 pub const MAGIC: [u8; 2] = *b"qc";
-/// The format version this crate reads and writes (bits 7–5 of the format byte).
-pub const VERSION: u8 = 2;
+/// The newest format version (bits 7–5 of the format byte): version 3, levels followed by a
+/// refinement. Version 2 files (levels only) are read and written too.
+pub const VERSION: u8 = 3;
+/// The version of files with levels only.
+pub const LEVELS_ONLY_VERSION: u8 = 2;
 /// The longest possible header in bytes (every varint at full length, explicit N, lattice).
 pub const MAX_HEADER_LEN: usize = 2 + 1 + 5 + 5 + 1 + 10 + 10 + 1 + 5 + 5 + 5 + 1;
 
@@ -30,11 +33,13 @@ const LATTICE_BIT: u8 = 0x10;
 const DEFAULTS_BIT: u8 = 0x08;
 const CODING_SHIFT: u8 = 2;
 
-/// The density byte and first level size that the format byte's defaults bit stands for:
-/// one sample per 4 pixels, 127 samples in level 0 (the encoder's defaults).
+/// The density byte and first level size that the format byte's defaults bit stands for in a
+/// version-2 file: one sample per 4 pixels, 127 samples in level 0.
 pub(crate) const DEFAULT_DENSITY_BYTE: u8 = 64;
 /// See [`DEFAULT_DENSITY_BYTE`].
 pub(crate) const DEFAULT_FIRST_LEVEL: u64 = 127;
+/// What the defaults bit stands for in a version-3 file: one level of `min(64, W·H)` samples.
+pub(crate) const REFINED_DEFAULT_SAMPLES: u64 = 64;
 
 /// Channels per sample and their order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -177,6 +182,8 @@ pub struct Header {
     pub coding: Coding,
     /// Explicit lattice fields, or `None` for the default lattice.
     pub lattice: Option<LatticeFields>,
+    /// Whether a refinement follows the levels (format version 3; version 2 without).
+    pub refinement: bool,
 }
 
 /// Internal: why parsing a prefix stopped.
@@ -252,7 +259,22 @@ impl Header {
             first_level,
             coding,
             lattice: None,
+            refinement: false,
         }
+    }
+
+    /// The format version of this header: 3 with a refinement, 2 without.
+    pub fn version(&self) -> u8 {
+        if self.refinement {
+            VERSION
+        } else {
+            LEVELS_ONLY_VERSION
+        }
+    }
+
+    /// The sample count and first level size the defaults bit stands for.
+    fn defaults(&self) -> (u64, u64) {
+        defaults_for(self.refinement, self.width, self.height)
     }
 
     /// The samples of the levels that start before sample `k`: what a decoder that stops at
@@ -435,12 +457,10 @@ impl Header {
         } else {
             0
         };
-        // Several density bytes may give N; the defaults bit is taken whenever 64 is one of them.
-        let defaults = self.first_level == DEFAULT_FIRST_LEVEL
-            && samples_for_density(self.width, self.height, DEFAULT_DENSITY_BYTE)
-                == self.total_samples;
+        // Several density bytes may give N; the defaults bit is taken whenever they agree.
+        let defaults = (self.total_samples, self.first_level) == self.defaults();
         out.push(
-            (VERSION << 5)
+            (self.version() << 5)
                 | lattice
                 | if defaults { DEFAULTS_BIT } else { 0 }
                 | (self.coding.id() << CODING_SHIFT)
@@ -506,31 +526,30 @@ impl Header {
             }
         }
         let version = format >> 5;
-        if version != VERSION {
+        if version != VERSION && version != LEVELS_ONLY_VERSION {
             return Err(FormatError::UnsupportedVersion { version }.into());
         }
+        let refinement = version == VERSION;
         let coding_id = (format >> CODING_SHIFT) & 1;
         let layout = Layout::from_channels((format & 3) + 1).unwrap_or(Layout::Grey);
         let (width, o_w) = c.varint("width", 32)?;
         let (height, o_h) = c.varint("height", 32)?;
         let defaults = format & DEFAULTS_BIT != 0;
         let mut o_n = c.pos as u64;
-        let d = if defaults {
-            DEFAULT_DENSITY_BYTE
+        let (total, first, o_l0) = if defaults {
+            let (n, l0) = defaults_for(refinement, width as u32, height as u32);
+            (n, l0, o_n)
         } else {
-            c.u8()?
-        };
-        let total = if d == 0 {
-            let (n, o) = c.varint("total samples", 64)?;
-            o_n = o;
-            n
-        } else {
-            samples_for_density(width as u32, height as u32, d)
-        };
-        let (first, o_l0) = if defaults {
-            (DEFAULT_FIRST_LEVEL, o_n)
-        } else {
-            c.varint("first level size", 64)?
+            let d = c.u8()?;
+            let total = if d == 0 {
+                let (n, o) = c.varint("total samples", 64)?;
+                o_n = o;
+                n
+            } else {
+                samples_for_density(width as u32, height as u32, d)
+            };
+            let (first, o_l0) = c.varint("first level size", 64)?;
+            (total, first, o_l0)
         };
         let o_param = c.pos as u64;
         let param = c.u8()?;
@@ -571,9 +590,26 @@ impl Header {
             first_level: first,
             coding,
             lattice,
+            refinement,
         };
         header.validate_at(&[o_w, o_h, o_n, o_l0, o_param, o_root])?;
         Ok((header, c.pos))
+    }
+}
+
+/// The sample count and first level size the defaults bit stands for: in version 2, one
+/// sample per 4 pixels in levels from 127; in version 3, one level of `min(64, W·H)`.
+fn defaults_for(refinement: bool, width: u32, height: u32) -> (u64, u64) {
+    if refinement {
+        let n = REFINED_DEFAULT_SAMPLES
+            .min(width as u64 * height as u64)
+            .max(1);
+        (n, REFINED_DEFAULT_SAMPLES)
+    } else {
+        (
+            samples_for_density(width, height, DEFAULT_DENSITY_BYTE),
+            DEFAULT_FIRST_LEVEL,
+        )
     }
 }
 

@@ -1,7 +1,7 @@
 //! A listing of what a (possibly truncated or damaged) file holds, for `qcs info`.
 
 use super::parser::{EndState, Event, Metadata, Parser, ParserOptions};
-use super::{varint, ChunkRef, FormatError, Header};
+use super::{varint, ChunkRef, FormatError, Header, RefinementHeader};
 use crate::Limits;
 use std::ops::Range;
 
@@ -25,6 +25,8 @@ pub struct InspectedChunk {
     pub payload_len: Option<u32>,
     /// The level it holds, for `L` chunks.
     pub level: Option<u32>,
+    /// The refinement layer it holds, for `R` chunks.
+    pub layer: Option<u32>,
     /// CRC status.
     pub status: ChunkStatus,
 }
@@ -65,6 +67,14 @@ pub struct Inspection {
     pub samples_verified: u64,
     /// Samples whose bytes are present (verified or not).
     pub samples_available: u64,
+    /// The refinement header (version 3), if its layer was reached.
+    pub refinement: Option<RefinementHeader>,
+    /// Where the levels end and the refinement begins: the offset of the first `R` chunk.
+    pub refinement_offset: Option<u64>,
+    /// Refinement layers verified.
+    pub layers_verified: u32,
+    /// Bytes present of each refinement stream (verified or not).
+    pub stream_bytes: Vec<u64>,
     /// Where the file ends.
     pub end: EndState,
     /// The error that stopped reading, if any (a header error, a limit, or a chunk error).
@@ -112,8 +122,12 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
     let mut chunks = Vec::new();
     let mut metadata = Vec::new();
     let mut level_data: Vec<u64> = Vec::new();
+    let mut refinement = None;
+    let mut refinement_offset = None;
+    let mut stream_bytes: Vec<u64> = Vec::new();
     let mut error = result.err();
     let levels_verified = parser.progress().levels_verified;
+    let layers_verified = parser.progress().layers_verified;
     for ev in events {
         match ev {
             Event::LevelStart { .. } => level_data.push(0),
@@ -127,15 +141,36 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
                     chunk,
                     payload_len: read_len(&chunk),
                     level: Some(level),
+                    layer: None,
                     status: ChunkStatus::Verified,
                 });
             }
+            Event::LayerStart { chunk, .. } => {
+                refinement_offset.get_or_insert(chunk.offset);
+            }
+            Event::RefinementHeader(h) => {
+                stream_bytes = vec![0; h.streams()];
+                refinement = Some(h);
+            }
+            Event::RefinementData { stream, bytes, .. } => {
+                if let Some(n) = stream_bytes.get_mut(stream as usize) {
+                    *n += bytes.len() as u64;
+                }
+            }
+            Event::LayerVerified { layer, chunk } => chunks.push(InspectedChunk {
+                chunk,
+                payload_len: read_len(&chunk),
+                level: None,
+                layer: Some(layer),
+                status: ChunkStatus::Verified,
+            }),
             Event::Metadata { chunk, metadata: m } => {
                 metadata.push(m);
                 chunks.push(InspectedChunk {
                     chunk,
                     payload_len: read_len(&chunk),
                     level: None,
+                    layer: None,
                     status: ChunkStatus::Verified,
                 });
             }
@@ -143,6 +178,7 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
                 chunk,
                 payload_len: Some(payload_len),
                 level: None,
+                layer: None,
                 status: ChunkStatus::Verified,
             }),
             Event::Stopped { error: e } => {
@@ -151,6 +187,7 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
                         chunk,
                         payload_len: read_len(&chunk),
                         level: (chunk.tag == super::chunk::LEVEL).then_some(levels_verified),
+                        layer: (chunk.tag == super::chunk::REFINEMENT).then_some(layers_verified),
                         status: ChunkStatus::Bad(e.clone()),
                     });
                 }
@@ -164,6 +201,7 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
             chunk,
             payload_len: read_len(&chunk),
             level: (chunk.tag == super::chunk::LEVEL).then_some(levels_verified),
+            layer: (chunk.tag == super::chunk::REFINEMENT).then_some(layers_verified),
             status: ChunkStatus::Truncated,
         });
     }
@@ -198,6 +236,10 @@ pub fn inspect(bytes: &[u8]) -> Inspection {
         } else {
             p.samples_available
         },
+        refinement,
+        refinement_offset,
+        layers_verified: p.layers_verified,
+        stream_bytes,
         end: parser.end_state(),
         error,
     }

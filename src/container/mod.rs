@@ -35,15 +35,18 @@ pub mod chunk;
 mod header;
 mod inspect;
 mod parser;
+mod refinement;
 pub mod varint;
 mod writer;
 
 pub(crate) use header::DEFAULT_FIRST_LEVEL;
 pub use header::{
-    header_check, Coding, Header, LatticeFields, Layout, MAGIC, MAX_HEADER_LEN, VERSION,
+    header_check, Coding, Header, LatticeFields, Layout, LEVELS_ONLY_VERSION, MAGIC,
+    MAX_HEADER_LEN, VERSION,
 };
 pub use inspect::{inspect, ChunkStatus, InspectedChunk, InspectedLevel, Inspection};
 pub use parser::{EndState, Event, Metadata, Parser, ParserOptions, Progress};
+pub use refinement::{encode_layer, PassLimit, RefinementHeader, Wavelet};
 pub use varint::VarintError;
 pub use writer::ContainerWriter;
 
@@ -101,7 +104,9 @@ pub enum FormatError {
         pixels: u64,
     },
     /// The format byte's version (its bits 7–5) is not one this decoder reads.
-    #[error("unsupported format version {version} (this decoder reads version 2) at byte 2")]
+    #[error(
+        "unsupported format version {version} (this decoder reads versions 2 and 3) at byte 2"
+    )]
     UnsupportedVersion {
         /// The version found.
         version: u8,
@@ -186,6 +191,47 @@ pub enum FormatError {
     ExtraLevel {
         /// The chunk.
         chunk: ChunkRef,
+    },
+    /// A refinement layer where the format does not allow one: in a version-2 file, before
+    /// the last level, or after the last layer the refinement header declares.
+    #[error("{chunk}: {reason}")]
+    MisplacedLayer {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// Why it cannot be there.
+        reason: &'static str,
+    },
+    /// A field of the refinement header or of a layer's segment table is out of its range.
+    #[error("{chunk}: {field} is {value}, expected {expected}")]
+    BadRefinement {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// The field's name as in the spec.
+        field: &'static str,
+        /// The value found.
+        value: u64,
+        /// What the spec allows.
+        expected: &'static str,
+    },
+    /// A varint of the refinement header or of a segment table is malformed.
+    #[error("{chunk}: {field}: {error}")]
+    RefinementVarint {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// The part it is in.
+        field: &'static str,
+        /// What is wrong with it.
+        error: VarintError,
+    },
+    /// A layer's segments do not fill its payload exactly.
+    #[error("{chunk}: the segment table declares {declared} bytes of segments, the payload holds {available}")]
+    SegmentLengths {
+        /// The chunk.
+        chunk: ChunkRef,
+        /// The sum of the segment lengths.
+        declared: u64,
+        /// The payload bytes after the table.
+        available: u64,
     },
     /// A second ICC profile chunk.
     #[error("{chunk}: second ICC profile")]

@@ -1,7 +1,8 @@
 //! The push parser: bytes in any chunking → [`Event`]s (spec/format.md §Decoding and truncation).
 
-use super::chunk::{self, ICC, LEVEL, TEXT};
+use super::chunk::{self, ICC, LEVEL, REFINEMENT, TEXT};
 use super::header::{Header, Stop, MAX_HEADER_LEN};
+use super::refinement::{Bad, Read, RefinementHeader, TableReader};
 use super::varint::VarintReader;
 use super::{ChunkRef, Coding, FormatError};
 use crate::Limits;
@@ -119,8 +120,37 @@ pub enum Event {
         /// Where its chunk is.
         chunk: ChunkRef,
     },
-    /// The last level was verified: only ancillary chunks may follow.
+    /// The last level was verified: in a version-2 file only ancillary chunks may follow; in a
+    /// version-3 file the refinement's layers come next.
     LevelsComplete,
+    /// A refinement layer (`R` chunk) starts.
+    LayerStart {
+        /// The layer, from 0.
+        layer: u32,
+        /// Where its chunk is.
+        chunk: ChunkRef,
+    },
+    /// The refinement header, read from the first layer: **not yet verified** by its CRC
+    /// (the layer's [`Event::LayerVerified`] verifies it).
+    RefinementHeader(RefinementHeader),
+    /// Bytes of a refinement stream, as they arrive: **not yet verified**. Concatenated, a
+    /// stream's bytes over the layers are the stream.
+    RefinementData {
+        /// The layer they are in.
+        layer: u32,
+        /// The stream (0 = low-low band, then the details from the coarsest level).
+        stream: u32,
+        /// The next bytes of the stream.
+        bytes: Vec<u8>,
+    },
+    /// The layer's chunk CRC matched: its bytes (and, for layer 0, the refinement header)
+    /// are verified.
+    LayerVerified {
+        /// The layer.
+        layer: u32,
+        /// Where its chunk is.
+        chunk: ChunkRef,
+    },
     /// A metadata chunk, CRC verified.
     Metadata {
         /// Where it is.
@@ -154,6 +184,8 @@ pub struct Progress {
     pub levels_verified: u32,
     /// Samples in verified levels (`[0, samples_verified)`).
     pub samples_verified: u64,
+    /// Refinement layers whose CRC has been verified.
+    pub layers_verified: u32,
     /// Samples whose bytes have all arrived (`≥ samples_verified`): the verified ones plus, in the
     /// raw coding, the complete samples of a partial level chunk, which are **unverified**. With the
     /// predictive coding the container cannot tell, and this equals `samples_verified`.
@@ -165,11 +197,13 @@ pub struct Progress {
 pub enum EndState {
     /// The header has not been fully received: nothing to show (a decoder may render grey).
     InHeader,
-    /// Between chunks, with levels missing: every level so far is complete and verified.
+    /// Between chunks, with levels or refinement layers missing: every one so far is complete
+    /// and verified.
     BetweenChunks,
     /// Inside a chunk: the complete samples of a partial level payload are usable but unverified.
     InChunk(ChunkRef),
-    /// Every level is verified and the bytes end between chunks: a complete file.
+    /// Every level (and every refinement layer) is verified and the bytes end between
+    /// chunks: a complete file.
     Complete,
     /// Recovery mode stopped on an error: only verified samples are valid.
     Stopped,
@@ -187,7 +221,7 @@ impl std::fmt::Display for EndState {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             EndState::InHeader => write!(f, "inside the header"),
-            EndState::BetweenChunks => write!(f, "between chunks, with levels missing"),
+            EndState::BetweenChunks => write!(f, "between chunks, with levels or layers missing"),
             EndState::InChunk(c) => write!(f, "inside {c}"),
             EndState::Complete => write!(f, "a complete file"),
             EndState::Stopped => write!(f, "stopped at a damaged chunk (recovery)"),
@@ -199,9 +233,20 @@ impl std::fmt::Display for EndState {
 #[derive(Clone, Debug)]
 enum Kind {
     Level { level: u32, samples: Range<u64> },
+    Layer(LayerRead),
     Icc(Vec<u8>),
     Text(Vec<u8>),
     Skip,
+}
+
+/// A layer being read: its header and segment table, then its segments.
+#[derive(Clone, Debug)]
+struct LayerRead {
+    layer: u32,
+    table: TableReader,
+    /// Once the table is read: the lengths of the segments still to come, the stream of the
+    /// first of them and the bytes left in it.
+    segments: Option<(Vec<u32>, usize)>,
 }
 
 #[derive(Clone, Debug)]
@@ -305,6 +350,11 @@ pub struct Parser {
     samples_verified: u64,
     metadata_bytes: u64,
     seen_icc: bool,
+    /// The refinement header, once read (version 3).
+    refinement: Option<RefinementHeader>,
+    /// Layers started and verified.
+    layers_started: u32,
+    layers_verified: u32,
 }
 
 impl Parser {
@@ -322,6 +372,28 @@ impl Parser {
             samples_verified: 0,
             metadata_bytes: 0,
             seen_icc: false,
+            refinement: None,
+            layers_started: 0,
+            layers_verified: 0,
+        }
+    }
+
+    /// The refinement header, once read from the first layer (version 3).
+    pub fn refinement(&self) -> Option<&RefinementHeader> {
+        self.refinement.as_ref()
+    }
+
+    /// Whether every level and (version 3) every refinement layer is verified.
+    fn all_verified(&self) -> bool {
+        if self.next_level < self.level_count {
+            return false;
+        }
+        match &self.header {
+            Some(h) if h.refinement => self
+                .refinement
+                .as_ref()
+                .is_some_and(|r| self.layers_verified == r.layers),
+            _ => true,
         }
     }
 
@@ -339,7 +411,7 @@ impl Parser {
     pub fn end_state(&self) -> EndState {
         match &self.state {
             State::Header => EndState::InHeader,
-            State::Tag if self.next_level >= self.level_count => EndState::Complete,
+            State::Tag if self.all_verified() => EndState::Complete,
             State::Tag => EndState::BetweenChunks,
             State::Length { chunk, .. }
             | State::Payload { chunk, .. }
@@ -376,6 +448,7 @@ impl Parser {
             bytes_consumed: self.offset,
             header_complete: self.header.is_some(),
             levels_verified: self.next_level,
+            layers_verified: self.layers_verified,
             samples_verified: self.samples_verified,
             samples_available: available,
         }
@@ -480,10 +553,14 @@ impl Parser {
                 mut kind,
             } => {
                 let want = (len - received) as usize;
-                let take = want.min(input.len());
+                let mut take = want.min(input.len());
+                if let Kind::Layer(read) = &mut kind {
+                    take = self.step_layer(read, chunk, len, received, &input[..take], events)?;
+                }
                 let bytes = &input[..take];
                 hasher.update(bytes);
                 match &mut kind {
+                    Kind::Layer(_) => {}
                     Kind::Level { level, .. } => events.push(Event::LevelData {
                         level: *level,
                         bytes: bytes.to_vec(),
@@ -585,13 +662,99 @@ impl Parser {
         }
     }
 
+    /// Reads layer bytes (at most `input`): the header and table a byte at a time, then
+    /// segment bytes up to the end of the current segment. Returns how many were taken.
+    fn step_layer(
+        &mut self,
+        read: &mut LayerRead,
+        chunk: ChunkRef,
+        len: u32,
+        received: u32,
+        input: &[u8],
+        events: &mut Vec<Event>,
+    ) -> Result<usize, Fail> {
+        let bad = |e: Bad| {
+            Fail::Format(match e {
+                Bad::Field(field, value, expected) => FormatError::BadRefinement {
+                    chunk,
+                    field,
+                    value,
+                    expected,
+                },
+                Bad::Varint(field, error) => FormatError::RefinementVarint {
+                    chunk,
+                    field,
+                    error,
+                },
+            })
+        };
+        let Some((lengths, stream)) = &mut read.segments else {
+            match read.table.push(input[0]).map_err(bad)? {
+                Read::More => {}
+                Read::Header(h) => {
+                    self.refinement = Some(h.clone());
+                    events.push(Event::RefinementHeader(h));
+                }
+                Read::Table(t) => {
+                    let declared: u64 = t.iter().map(|&l| l as u64).sum();
+                    let available = (len - received - 1) as u64;
+                    if declared != available {
+                        return Err(Fail::Format(FormatError::SegmentLengths {
+                            chunk,
+                            declared,
+                            available,
+                        }));
+                    }
+                    read.segments = Some((t, 0));
+                    Self::skip_empty(read);
+                }
+            }
+            return Ok(1);
+        };
+        let left = lengths[*stream] as usize;
+        let take = left.min(input.len());
+        events.push(Event::RefinementData {
+            layer: read.layer,
+            stream: *stream as u32,
+            bytes: input[..take].to_vec(),
+        });
+        lengths[*stream] -= take as u32;
+        Self::skip_empty(read);
+        Ok(take)
+    }
+
+    /// Moves a layer's current segment past those with no bytes left.
+    fn skip_empty(read: &mut LayerRead) {
+        if let Some((lengths, stream)) = &mut read.segments {
+            while *stream < lengths.len() && lengths[*stream] == 0 {
+                *stream += 1;
+            }
+        }
+    }
+
     fn step_tag(&mut self, tag: u8) -> Result<(), Fail> {
         let chunk = ChunkRef {
             index: self.chunk_index,
             tag,
             offset: self.offset,
         };
-        if tag == LEVEL {
+        if tag == REFINEMENT {
+            let misplaced =
+                |reason| Err(Fail::Format(FormatError::MisplacedLayer { chunk, reason }));
+            if !self.header.as_ref().is_some_and(|h| h.refinement) {
+                return misplaced("a refinement layer in a version-2 file (levels only)");
+            }
+            if self.next_level < self.level_count {
+                return misplaced("a refinement layer before the last level");
+            }
+            if self
+                .refinement
+                .as_ref()
+                .is_some_and(|r| self.layers_started >= r.layers)
+            {
+                return misplaced("a refinement layer after the last one its header declares");
+            }
+        } else if tag == LEVEL {
             if self.next_level >= self.level_count {
                 return Err(Fail::Format(FormatError::ExtraLevel { chunk }));
             }
@@ -642,6 +805,19 @@ impl Parser {
                 });
                 Ok(Kind::Level { level, samples })
             }
+            REFINEMENT => {
+                let layer = self.layers_started;
+                self.layers_started += 1;
+                events.push(Event::LayerStart { layer, chunk });
+                Ok(Kind::Layer(LayerRead {
+                    layer,
+                    table: TableReader::new(
+                        header.layout.channels() as usize,
+                        self.refinement.as_ref(),
+                    ),
+                    segments: None,
+                }))
+            }
             ICC | TEXT => {
                 let total = self.metadata_bytes.saturating_add(len as u64);
                 self.opts
@@ -675,6 +851,22 @@ impl Parser {
                 if self.next_level == self.level_count {
                     events.push(Event::LevelsComplete);
                 }
+            }
+            Kind::Layer(read) => {
+                if read.segments.is_none() {
+                    // The payload ended inside the header or the segment table.
+                    return Err(Fail::Format(FormatError::BadRefinement {
+                        chunk,
+                        field: "layer payload",
+                        value: len as u64,
+                        expected: "a refinement header (first layer) and a segment table",
+                    }));
+                }
+                self.layers_verified += 1;
+                events.push(Event::LayerVerified {
+                    layer: read.layer,
+                    chunk,
+                });
             }
             Kind::Icc(data) => events.push(Event::Metadata {
                 chunk,

@@ -1,7 +1,7 @@
 //! Writing a `.qcs` file to any [`std::io::Write`].
 
-use super::chunk::{self, ICC, LEVEL, TEXT};
-use super::Header;
+use super::chunk::{self, ICC, LEVEL, REFINEMENT, TEXT};
+use super::{encode_layer, Header, RefinementHeader};
 use std::io::Write;
 
 /// Writes a header, then level 0 (no tag; its CRC covers the header), then the other level
@@ -33,6 +33,9 @@ pub struct ContainerWriter<W: Write> {
     icc_written: bool,
     /// The header's bytes, until level 0 (whose CRC covers them) is written.
     header_bytes: Vec<u8>,
+    /// The refinement header once its first layer is written, and the layers written.
+    refinement: Option<RefinementHeader>,
+    layers_written: u32,
 }
 
 impl<W: Write> ContainerWriter<W> {
@@ -49,6 +52,8 @@ impl<W: Write> ContainerWriter<W> {
             written: bytes.len() as u64,
             icc_written: false,
             header_bytes: bytes,
+            refinement: None,
+            layers_written: 0,
         })
     }
 
@@ -112,6 +117,58 @@ impl<W: Write> ContainerWriter<W> {
         Ok(())
     }
 
+    /// Writes the next refinement layer (an `R` chunk, version 3, after the last level): its
+    /// segments, one per stream (trailing empty ones are left out). The first layer carries
+    /// the refinement header `header`, which later calls must repeat.
+    pub fn write_layer(
+        &mut self,
+        header: &RefinementHeader,
+        segments: &[&[u8]],
+    ) -> Result<(), crate::Error> {
+        if !self.header.refinement {
+            return Err(crate::Error::Parameter(
+                "a refinement layer in a file whose header has none (version 2)".into(),
+            ));
+        }
+        if self.next_level < self.level_count {
+            return Err(crate::Error::Parameter(
+                "a refinement layer before the last level".into(),
+            ));
+        }
+        if segments.len() > header.streams() {
+            return Err(crate::Error::Parameter(format!(
+                "{} segments for {} streams",
+                segments.len(),
+                header.streams()
+            )));
+        }
+        let first = match &self.refinement {
+            None => {
+                header
+                    .validate(self.header.layout.channels() as usize)
+                    .map_err(|_| crate::Error::Parameter("invalid refinement header".into()))?;
+                self.refinement = Some(header.clone());
+                true
+            }
+            Some(h) if h == header => false,
+            Some(_) => {
+                return Err(crate::Error::Parameter(
+                    "a later layer with another refinement header".into(),
+                ))
+            }
+        };
+        if self.layers_written >= header.layers {
+            return Err(crate::Error::Parameter(format!(
+                "all {} layers already written",
+                header.layers
+            )));
+        }
+        let payload = encode_layer(first.then_some(header), segments);
+        self.put(chunk::encode(REFINEMENT, &payload), payload.len())?;
+        self.layers_written += 1;
+        Ok(())
+    }
+
     /// Writes (or, before level 0, queues) an ancillary chunk. `tag` must have the ancillary bit
     /// (0x20) set; the payload is written as given. At most one ICC (`i`) chunk.
     pub fn write_ancillary(&mut self, tag: u8, payload: &[u8]) -> Result<(), crate::Error> {
@@ -169,6 +226,15 @@ impl<W: Write> ContainerWriter<W> {
                 "only {} of {} levels written",
                 self.next_level, self.level_count
             )));
+        }
+        if self.header.refinement {
+            let want = self.refinement.as_ref().map_or(1, |r| r.layers);
+            if self.layers_written < want {
+                return Err(crate::Error::Parameter(format!(
+                    "only {} of {want} refinement layers written",
+                    self.layers_written
+                )));
+            }
         }
         self.inner.flush()?;
         Ok(self.inner)

@@ -131,7 +131,50 @@ fn rate_distortion() {
                     hi = mid
                 }
             }
-            let cuts: Vec<usize> = coded.iter().map(|c| cut_at(c, hi)).collect();
+            let by_key = std::env::var("BYKEY").is_ok();
+            let keys: Vec<Vec<i32>> = layout
+                .stream_states(None)
+                .iter()
+                .map(|st| {
+                    let (_, cw) = channel_classes(3);
+                    let bands = layout.bands();
+                    st.passes
+                        .iter()
+                        .map(|p| {
+                            schedule::key(
+                                layout.kernel,
+                                &bands[p.band as usize],
+                                cw[p.channel as usize],
+                                p.bitplane,
+                                p.kind,
+                            )
+                        })
+                        .collect()
+                })
+                .collect();
+            let cut_key = |k: i32| -> Vec<usize> {
+                keys.iter()
+                    .map(|ks| ks.iter().take_while(|&&x| x >= k).count())
+                    .collect()
+            };
+            let cuts: Vec<usize> = if by_key {
+                let mut best = cut_key(i32::MAX);
+                for k in (-200..800).rev() {
+                    let c = cut_key(k);
+                    let total: usize = coded
+                        .iter()
+                        .zip(&c)
+                        .map(|(s, &n)| if n == 0 { 0 } else { s.pass_end[n - 1] })
+                        .sum();
+                    if total as f64 > budget {
+                        break;
+                    }
+                    best = c;
+                }
+                best
+            } else {
+                coded.iter().map(|c| cut_at(c, hi)).collect()
+            };
             let mut decs: Vec<StreamDecoder> = layout
                 .stream_states(None)
                 .into_iter()
@@ -168,4 +211,158 @@ fn rate_distortion() {
             .join(" ")
     );
     println!("J2K:  25.16 27.97 30.75 34.31 38.72");
+}
+
+/// Levels + refinement: PSNR at byte budgets for several choices of where the levels stop.
+#[test]
+#[ignore]
+fn base_choice() {
+    use crate::coding::predictive::{fixed_position, Params};
+    use crate::sites::Quasicrystal;
+    let budgets = [32usize, 64, 128, 256, 512, 1024, 2048, 4096, 8192];
+    let cands: Vec<(u64, u64, u8)> = vec![
+        (16, 16, 40),
+        (32, 32, 40),
+        (64, 64, 40),
+        (127, 127, 40),
+        (127, 127, 25),
+        (127, 381, 40),
+        (64, 192, 40),
+        (32, 96, 40),
+    ];
+    let levels: u32 = std::env::var("LEVELS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(6);
+    let files = corpus();
+    let mut sums = vec![vec![0.0; budgets.len() + 2]; cands.len()];
+    for path in &files {
+        let img = image::open(path).unwrap().to_rgb8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let px = img.as_raw().clone();
+        let dynimg = image::DynamicImage::ImageRgb8(img.clone());
+        for (ci, &(l0, n, q)) in cands.iter().enumerate() {
+            let opts = crate::EncodeOptions {
+                samples: Some(n),
+                first_level: l0,
+                coding: Params::from_quality(q).coding(),
+                ..Default::default()
+            };
+            let file = crate::encode(&dynimg, &opts).unwrap();
+            let b0 = file.len() + 16; // the refinement's header and first layer's framing
+            let mut dec = crate::StreamDecoder::new(crate::Limits::default());
+            dec.push(&file).unwrap();
+            let (sites, colours) = dec.samples(n);
+            let seq = Quasicrystal::new(w as u32, h as u32).unwrap();
+            let positions: Vec<[i64; 2]> = sites
+                .iter()
+                .map(|s| fixed_position(&seq.frame(), s.lattice))
+                .collect();
+            let colours = colours.to_vec();
+            let frac = 2;
+            let kernel = Kernel::Integer97;
+            let pred =
+                super::predict::low_band(&positions, &colours, 3, w, h, kernel, levels, frac);
+            let mut planes = to_planes(&px, 3, frac);
+            let (lw, lh) = low_size(w, h, levels);
+            for (c, p) in planes.iter_mut().enumerate() {
+                forward(kernel, p, w, h, levels);
+                for y in 0..lh {
+                    for x in 0..lw {
+                        p[y * w + x] -= pred[c][y * lw + x];
+                    }
+                }
+            }
+            let layout = Layout {
+                width: w,
+                height: h,
+                channels: 3,
+                kernel,
+                levels,
+                top: planes.iter().map(|p| bitplanes(p)).collect(),
+            };
+            let coded: Vec<CodedStream> = layout
+                .stream_states(Some(&planes))
+                .into_iter()
+                .map(|mut st| {
+                    let ws = pass_weights(&layout, &st.passes);
+                    let n = st.passes.len();
+                    encode_stream(&mut st, n, &ws)
+                })
+                .collect();
+            let src = Source {
+                width: w,
+                height: h,
+                channels: 3,
+                kernel,
+                levels,
+                frac,
+                prediction: &pred,
+            };
+            let at = |budget: usize| -> f64 {
+                if budget < b0 {
+                    let d = crate::decode(
+                        &file,
+                        &crate::DecodeOptions {
+                            max_bytes: Some(budget),
+                            ..Default::default()
+                        },
+                    )
+                    .unwrap();
+                    return psnr(&d.image.to_rgb8().into_raw(), &px);
+                }
+                let budget = (budget - b0) as f64;
+                let (mut lo, mut hi) = (1e-6f64, 1e12f64);
+                for _ in 0..80 {
+                    let mid = (lo * hi).sqrt();
+                    let total: usize = coded
+                        .iter()
+                        .map(|c| {
+                            let k = cut_at(c, mid);
+                            if k == 0 {
+                                0
+                            } else {
+                                c.pass_end[k - 1]
+                            }
+                        })
+                        .sum();
+                    if total as f64 > budget {
+                        lo = mid
+                    } else {
+                        hi = mid
+                    }
+                }
+                let mut decs: Vec<StreamDecoder> = layout
+                    .stream_states(None)
+                    .into_iter()
+                    .zip(&coded)
+                    .map(|(st, c)| {
+                        let k = cut_at(c, hi);
+                        let mut d = StreamDecoder::new(st, k);
+                        d.advance(&c.bytes[..if k == 0 { 0 } else { c.pass_end[k - 1] }]);
+                        d
+                    })
+                    .collect();
+                let refs: Vec<Option<&bitplane::StreamState>> =
+                    decs.iter_mut().map(|d| Some(&d.state)).collect();
+                psnr(&picture(&src, &refs, 0), &px)
+            };
+            for (bi, &b) in budgets.iter().enumerate() {
+                sums[ci][bi] += at(b);
+            }
+            sums[ci][budgets.len()] += at((0.25 * (w * h) as f64 / 8.0) as usize);
+            sums[ci][budgets.len() + 1] += at((1.0 * (w * h) as f64 / 8.0) as usize);
+        }
+    }
+    println!("L0 N q | 32 64 128 256 512 1K 2K 4K 8K | 0.25bpp 1bpp");
+    for (ci, c) in cands.iter().enumerate() {
+        println!(
+            "{c:?}: {}",
+            sums[ci]
+                .iter()
+                .map(|v| format!("{:.2}", v / files.len() as f64))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
 }

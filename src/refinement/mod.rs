@@ -13,15 +13,19 @@
 #![allow(dead_code)]
 
 pub(crate) mod bitplane;
+pub(crate) mod decode;
+pub(crate) mod encode;
 #[cfg(test)]
 mod lab;
 pub(crate) mod picture;
+pub(crate) mod predict;
+pub(crate) mod resample;
 pub(crate) mod schedule;
 pub(crate) mod wavelet;
 
 use bitplane::{BandState, ChannelClass, Decoding, Encoding, ErrorDrop, StreamState};
 use schedule::{bands, passes, Band, Pass};
-use wavelet::Kernel;
+pub(crate) use wavelet::Kernel;
 
 use crate::coding::range::{RangeDecoder, RangeEncoder};
 

@@ -138,12 +138,23 @@ pub(crate) enum PassKind {
 impl PassKind {
     /// How much later than a propagation pass of the same bit-plane the pass comes
     /// (sixteenths of a bit-plane).
-    fn delay(self) -> i32 {
+    pub(crate) fn delay(self) -> i32 {
         match self {
             PassKind::Propagation => 0,
             PassKind::Refinement | PassKind::Cleanup => 8,
         }
     }
+}
+
+/// A pass's priority: higher first (sixteenths of a bit-plane).
+pub(crate) fn key(
+    kernel: Kernel,
+    band: &Band,
+    channel_weight: i32,
+    bitplane: u8,
+    kind: PassKind,
+) -> i32 {
+    16 * bitplane as i32 + band_weight(kernel, band) + channel_weight - kind.delay()
 }
 
 /// One pass: a bit-plane of a band of a channel.
@@ -176,6 +187,7 @@ pub(crate) fn passes(
                     PassKind::Cleanup,
                 ] {
                     let key = 16 * p as i32 + w - kind.delay();
+                    debug_assert_eq!(key, self::key(kernel, band, cw, p, kind));
                     out[band.stream as usize].push((
                         key,
                         Pass {

@@ -15,14 +15,8 @@
 //! (whole-sample symmetry), which for these symmetric lifting steps means a neighbour index
 //! past either end is clamped to the last valid one.
 
-/// A lifting kernel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Kernel {
-    /// The reversible 5/3 (LeGall) kernel.
-    Reversible53,
-    /// The 9/7 (CDF) kernel in 12-bit fixed point.
-    Integer97,
-}
+/// A lifting kernel: the format's [`Wavelet`](crate::container::Wavelet).
+pub(crate) use crate::container::Wavelet as Kernel;
 
 /// The 9/7 lifting weights, times 4096 and rounded: α, β, γ, δ.
 pub(crate) const W97: [i32; 4] = [-6497, -217, 3616, 1817];

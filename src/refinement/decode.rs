@@ -1,0 +1,198 @@
+//! Decoding a refinement as its bytes arrive: the streams' bytes, their decoders, and the
+//! picture at any size (spec/reconstruction.md, *The refined picture*).
+
+use super::bitplane::StreamState;
+use super::picture::{picture, Source};
+use super::predict;
+use super::resample::resample;
+use super::schedule::key;
+use super::wavelet::low_size;
+use super::{channel_classes, Layout, StreamDecoder};
+use crate::container::{PassLimit, RefinementHeader};
+
+/// A refinement being decoded.
+#[derive(Clone, Debug)]
+pub(crate) struct RefinementDecoder {
+    layout: Layout,
+    frac: u32,
+    /// Per channel, the low-low band's prediction from the levels.
+    prediction: Vec<Vec<i32>>,
+    /// Each stream's decoder; `None` for a stream this decoder skips (a picture smaller than
+    /// the image needs only the first streams).
+    streams: Vec<Option<StreamDecoder>>,
+    limits: Vec<usize>,
+    /// Each stream's bytes received so far, and how many of them are in verified layers.
+    bytes: Vec<Vec<u8>>,
+    verified: Vec<usize>,
+}
+
+impl RefinementDecoder {
+    /// A decoder for a `width × height` image with `channels` channels, whose levels' samples
+    /// have the fixed positions `positions` and the decoded colours `colours`. It decodes
+    /// streams `0..wanted` (at most all of them).
+    pub(crate) fn new(
+        header: &RefinementHeader,
+        width: u32,
+        height: u32,
+        channels: usize,
+        positions: &[[i64; 2]],
+        colours: &[u8],
+        wanted: usize,
+    ) -> RefinementDecoder {
+        let layout = Layout {
+            width: width as usize,
+            height: height as usize,
+            channels,
+            kernel: header.wavelet,
+            levels: header.levels as u32,
+            top: header.bitplanes.clone(),
+        };
+        let frac = header.fraction_bits as u32;
+        let prediction = predict::low_band(
+            positions,
+            colours,
+            channels,
+            layout.width,
+            layout.height,
+            layout.kernel,
+            layout.levels,
+            frac,
+        );
+        let limits = pass_limits(&layout, &header.limit);
+        let streams = layout
+            .stream_states(None)
+            .into_iter()
+            .zip(&limits)
+            .enumerate()
+            .map(|(s, (st, &n))| (s < wanted).then(|| StreamDecoder::new(st, n)))
+            .collect();
+        let n = layout.streams();
+        RefinementDecoder {
+            layout,
+            frac,
+            prediction,
+            streams,
+            limits,
+            bytes: vec![Vec::new(); n],
+            verified: vec![0; n],
+        }
+    }
+
+    /// The next bytes of stream `s` (not yet verified). A skipped stream's are not kept.
+    pub(crate) fn push(&mut self, s: usize, bytes: &[u8]) {
+        if self.streams.get(s).is_some_and(Option::is_some) {
+            self.bytes[s].extend_from_slice(bytes);
+        }
+    }
+
+    /// The layer being read is verified: every byte so far is.
+    pub(crate) fn verify(&mut self) {
+        for (v, b) in self.verified.iter_mut().zip(&self.bytes) {
+            *v = b.len();
+        }
+    }
+
+    /// Recovery: forgets the bytes of the layer that failed (the streams start over from their
+    /// verified bytes).
+    pub(crate) fn drop_unverified(&mut self) {
+        let states = self.layout.stream_states(None);
+        for (s, st) in states.into_iter().enumerate() {
+            self.bytes[s].truncate(self.verified[s]);
+            if let Some(d) = &mut self.streams[s] {
+                *d = StreamDecoder::new(st, self.limits[s]);
+            }
+        }
+    }
+
+    /// Keeps only the streams a `width × height` picture needs (the others' bytes are
+    /// dropped as they arrive, and never decoded).
+    pub(crate) fn keep_streams_for(&mut self, width: u32, height: u32) {
+        let needed = Self::streams_for(self.layout.levels, self.level_for(width, height));
+        for d in self.streams.iter_mut().skip(needed) {
+            *d = None;
+        }
+    }
+
+    /// The transform level a `width × height` picture is drawn from: the deepest whose low-low
+    /// band is at least that large.
+    pub(crate) fn level_for(&self, width: u32, height: u32) -> u32 {
+        let (w, h) = (width as usize, height as usize);
+        (0..=self.layout.levels)
+            .rev()
+            .find(|&k| {
+                let (lw, lh) = low_size(self.layout.width, self.layout.height, k);
+                lw >= w && lh >= h
+            })
+            .unwrap_or(0)
+    }
+
+    /// The streams a picture at transform level `stop` draws on.
+    pub(crate) fn streams_for(levels: u32, stop: u32) -> usize {
+        (levels - stop.min(levels)) as usize + 1
+    }
+
+    /// The picture at `width × height` from the bytes received so far (interleaved, the file's
+    /// layout).
+    pub(crate) fn render(&mut self, width: u32, height: u32) -> Vec<u8> {
+        let stop = self.level_for(width, height);
+        let needed = Self::streams_for(self.layout.levels, stop);
+        for (s, d) in self.streams.iter_mut().enumerate().take(needed) {
+            if let Some(d) = d {
+                d.advance(&self.bytes[s]);
+            }
+        }
+        let states: Vec<Option<&StreamState>> = self
+            .streams
+            .iter()
+            .enumerate()
+            .map(|(s, d)| d.as_ref().filter(|_| s < needed).map(|d| &d.state))
+            .collect();
+        let src = Source {
+            width: self.layout.width,
+            height: self.layout.height,
+            channels: self.layout.channels,
+            kernel: self.layout.kernel,
+            levels: self.layout.levels,
+            frac: self.frac,
+            prediction: &self.prediction,
+        };
+        let pic = picture(&src, &states, stop);
+        let (pw, ph) = low_size(self.layout.width, self.layout.height, stop);
+        resample(
+            &pic,
+            pw,
+            ph,
+            self.layout.channels,
+            width as usize,
+            height as usize,
+        )
+    }
+}
+
+/// The number of passes the file codes in each stream.
+pub(crate) fn pass_limits(layout: &Layout, limit: &PassLimit) -> Vec<usize> {
+    match limit {
+        PassLimit::Counts(c) => c.iter().map(|&n| n as usize).collect(),
+        PassLimit::Key(k) => {
+            let (_, weights) = channel_classes(layout.channels);
+            let bands = layout.bands();
+            layout
+                .passes()
+                .iter()
+                .map(|ps| {
+                    ps.iter()
+                        .take_while(|p| {
+                            key(
+                                layout.kernel,
+                                &bands[p.band as usize],
+                                weights[p.channel as usize],
+                                p.bitplane,
+                                p.kind,
+                            ) >= *k
+                        })
+                        .count()
+                })
+                .collect()
+        }
+    }
+}

@@ -1,0 +1,255 @@
+//! Encoding a refinement: transform, prediction, streams, and where the bytes go — which
+//! passes to code (a quality, lossless, or a size) and how to split them into layers.
+
+use super::decode::pass_limits;
+use super::picture::to_planes;
+use super::schedule::band_weight;
+use super::wavelet::{forward, low_size, Kernel};
+use super::{bitplanes, channel_classes, encode_stream, predict, CodedStream, Layout};
+use crate::container::{PassLimit, RefinementHeader};
+
+/// What the refinement should reach.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Goal {
+    /// Every pass whose priority key is at least this.
+    Key(i32),
+    /// Every pass (with the reversible 5/3 and no fraction bits: exactly the input).
+    Lossless,
+    /// As good a picture as fits in this many bytes of refinement (layer framing included).
+    Bytes(usize),
+}
+
+/// The refinement's transform and goal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Params {
+    pub kernel: Kernel,
+    pub frac: u32,
+    pub levels: u32,
+    pub goal: Goal,
+    /// Bytes of refinement in the first layer (the later ones double).
+    pub first_layer: usize,
+}
+
+/// The transform levels for a `width × height` image: until the low-low band's longer side
+/// is at most 16 coefficients (at most 15 levels).
+pub(crate) fn default_levels(width: u32, height: u32) -> u32 {
+    let mut levels = 0;
+    let (mut w, mut h) = (width as usize, height as usize);
+    while w.max(h) > 16 && levels < 15 {
+        w = w.div_ceil(2);
+        h = h.div_ceil(2);
+        levels += 1;
+    }
+    levels
+}
+
+/// A refinement, coded: its header and its layers (each a segment per stream).
+#[derive(Clone, Debug)]
+pub(crate) struct Encoded {
+    pub header: RefinementHeader,
+    pub layers: Vec<Vec<Vec<u8>>>,
+}
+
+/// Framing a layer costs besides its segments: the chunk's tag, length and CRC, the table's
+/// count and a length per segment (estimates, for the byte goal).
+fn framing(layers: usize, streams: usize) -> usize {
+    layers * (1 + 2 + 4 + 1 + 2 * streams)
+}
+
+/// The weight of each pass of a stream (the squared error in the picture per unit squared
+/// error of a coefficient of its band and channel, over 4^F).
+fn pass_weights(layout: &Layout, frac: u32, passes: &[super::schedule::Pass]) -> Vec<f64> {
+    let (_, cw) = channel_classes(layout.channels);
+    let bands = layout.bands();
+    let scale = (1u64 << (2 * frac)) as f64;
+    passes
+        .iter()
+        .map(|p| {
+            let w = band_weight(layout.kernel, &bands[p.band as usize]) + cw[p.channel as usize];
+            2f64.powf(w as f64 / 8.0) / scale
+        })
+        .collect()
+}
+
+/// Passes of `stream` to keep at slope `lambda`: the point of its (bytes, gain) curve that
+/// maximises gain − λ·bytes.
+fn cut_at(stream: &CodedStream, lambda: f64) -> usize {
+    let mut best = (0.0f64, 0usize);
+    let mut g = 0.0;
+    for (k, (&e, &dg)) in stream.pass_end.iter().zip(&stream.gain).enumerate() {
+        g += dg;
+        let v = g - lambda * e as f64;
+        if v > best.0 {
+            best = (v, k + 1);
+        }
+    }
+    best.1
+}
+
+/// Bytes of `stream` that decode its first `k` passes.
+fn end_of(stream: &CodedStream, k: usize) -> usize {
+    if k == 0 {
+        0
+    } else {
+        stream.pass_end[k - 1].min(stream.bytes.len())
+    }
+}
+
+/// The slope whose cuts fill at most `budget` bytes (as large a total as possible).
+fn slope_for(streams: &[CodedStream], budget: usize) -> f64 {
+    let total = |l: f64| -> usize { streams.iter().map(|s| end_of(s, cut_at(s, l))).sum() };
+    let (mut lo, mut hi) = (1e-12f64, 1e15f64);
+    if total(lo) <= budget {
+        return lo;
+    }
+    for _ in 0..100 {
+        let mid = (lo * hi).sqrt();
+        if total(mid) > budget {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// Codes the refinement of `pixels` (`channels` interleaved, `width × height`) over levels
+/// whose samples have fixed positions `positions` and decoded colours `colours`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn encode(
+    pixels: &[u8],
+    width: u32,
+    height: u32,
+    channels: usize,
+    positions: &[[i64; 2]],
+    colours: &[u8],
+    params: Params,
+) -> Encoded {
+    let (w, h) = (width as usize, height as usize);
+    let Params {
+        kernel,
+        frac,
+        levels,
+        goal,
+        ..
+    } = params;
+    let mut planes = to_planes(pixels, channels, frac);
+    let prediction = predict::low_band(positions, colours, channels, w, h, kernel, levels, frac);
+    let (lw, lh) = low_size(w, h, levels);
+    for (plane, pred) in planes.iter_mut().zip(&prediction) {
+        forward(kernel, plane, w, h, levels);
+        for y in 0..lh {
+            for (v, p) in plane[y * w..y * w + lw].iter_mut().zip(&pred[y * lw..]) {
+                *v -= p;
+            }
+        }
+    }
+    let layout = Layout {
+        width: w,
+        height: h,
+        channels,
+        kernel,
+        levels,
+        top: planes.iter().map(|p| bitplanes(p)).collect(),
+    };
+    let all: Vec<usize> = layout.passes().iter().map(Vec::len).collect();
+    let (limits, limit) = match goal {
+        Goal::Key(k) => (pass_limits(&layout, &PassLimit::Key(k)), PassLimit::Key(k)),
+        Goal::Lossless | Goal::Bytes(_) => (all.clone(), PassLimit::Counts(vec![])),
+    };
+    let code = |limits: &[usize]| -> Vec<CodedStream> {
+        layout
+            .stream_states(Some(&planes))
+            .into_iter()
+            .zip(limits)
+            .map(|(mut st, &n)| {
+                let weights = pass_weights(&layout, frac, &st.passes);
+                encode_stream(&mut st, n, &weights)
+            })
+            .collect()
+    };
+    let mut streams = code(&limits);
+    let limit = match goal {
+        Goal::Key(_) => limit,
+        Goal::Lossless => PassLimit::Counts(all.iter().map(|&n| n as u32).collect()),
+        Goal::Bytes(budget) => {
+            // Layers for about log2(budget / first) doublings.
+            let layers = layer_count(budget, params.first_layer);
+            let room = budget.saturating_sub(framing(layers, layout.streams()) + 8 + channels);
+            let lambda = slope_for(&streams, room);
+            let cuts: Vec<usize> = streams.iter().map(|s| cut_at(s, lambda)).collect();
+            streams = code(&cuts);
+            PassLimit::Counts(cuts.iter().map(|&n| n as u32).collect())
+        }
+    };
+    let layers = split_layers(&streams, params.first_layer);
+    Encoded {
+        header: RefinementHeader {
+            wavelet: kernel,
+            fraction_bits: frac as u8,
+            levels: levels as u8,
+            bitplanes: layout.top.clone(),
+            layers: layers.len() as u32,
+            limit,
+        },
+        layers,
+    }
+}
+
+/// Layers for a refinement of about `total` bytes whose first layer holds `first`.
+fn layer_count(total: usize, first: usize) -> usize {
+    let mut n = 1;
+    let mut size = first.max(1);
+    while size < total {
+        size *= 2;
+        n += 1;
+    }
+    n
+}
+
+/// Splits the coded streams into layers of about `first`, 2·`first`, 4·`first`… bytes, each
+/// holding the passes of every stream whose rate–distortion slope is above the layer's.
+fn split_layers(streams: &[CodedStream], first: usize) -> Vec<Vec<Vec<u8>>> {
+    let total: usize = streams.iter().map(|s| s.bytes.len()).sum();
+    let n = layer_count(total, first);
+    let mut ends: Vec<Vec<usize>> = Vec::with_capacity(n);
+    let mut budget = first.max(1);
+    for layer in 0..n {
+        let cut: Vec<usize> = if layer + 1 == n {
+            streams.iter().map(|s| s.bytes.len()).collect()
+        } else {
+            let lambda = slope_for(streams, budget);
+            streams
+                .iter()
+                .map(|s| end_of(s, cut_at(s, lambda)))
+                .collect()
+        };
+        // Never go back: a stream's bytes only grow from layer to layer.
+        let cut = match ends.last() {
+            Some(prev) => cut.iter().zip(prev).map(|(&c, &p)| c.max(p)).collect(),
+            None => cut,
+        };
+        ends.push(cut);
+        budget *= 2;
+    }
+    let mut layers = Vec::with_capacity(n);
+    let mut start = vec![0usize; streams.len()];
+    for e in ends {
+        let segs: Vec<Vec<u8>> = streams
+            .iter()
+            .zip(&start)
+            .zip(&e)
+            .map(|((s, &a), &b)| s.bytes[a..b].to_vec())
+            .collect();
+        // Layers that would be empty are merged into the next.
+        if segs.iter().all(Vec::is_empty) {
+            continue;
+        }
+        layers.push(segs);
+        start = e;
+    }
+    if layers.is_empty() {
+        layers.push(vec![Vec::new(); streams.len()]);
+    }
+    layers
+}
