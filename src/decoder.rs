@@ -134,7 +134,9 @@ impl StreamDecoder {
     /// use qcs::container::ParserOptions;
     /// use qcs::{Method, StreamDecoder};
     /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x * y) as u8])));
-    /// let bytes = qcs::encode(&img, &Default::default())?;
+    /// // A file of levels only: one sample per 4 pixels.
+    /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
+    /// let bytes = qcs::encode(&img, &levels)?;
     /// let opts = ParserOptions::default().decode_before(qcs::thumbnail_samples(6, 6));
     /// let mut dec = StreamDecoder::with_options(opts);
     /// dec.push(&bytes)?;
@@ -327,7 +329,7 @@ impl StreamDecoder {
                         usize::MAX,
                     );
                     if let Some((w, ht)) = self.size_hint {
-                        dec.keep_streams_for(w, ht);
+                        dec.keep_streams_for_thumbnail(w, ht);
                     }
                     self.refinement = Some(dec);
                 }
@@ -397,9 +399,9 @@ impl StreamDecoder {
         self.layers_complete
     }
 
-    /// Decode only the refinement streams that a picture of `width × height` needs: a
-    /// decoder that only ever renders that small skips the rest of the refinement.
-    pub(crate) fn with_size_hint(mut self, width: u32, height: u32) -> Self {
+    /// Decode only the refinement streams that a thumbnail of `width × height` needs: a
+    /// decoder that only ever renders such thumbnails skips the rest of the refinement.
+    pub(crate) fn with_thumbnail_size(mut self, width: u32, height: u32) -> Self {
         self.size_hint = Some((width, height));
         self
     }
@@ -465,11 +467,14 @@ impl StreamDecoder {
 
     /// Renders the picture from the first `k` samples received so far (or all, if fewer), at
     /// `width × height`: a [`Picture::Preview`] unless it draws on every sample of the file.
+    /// With `k` at least the file's sample count, a file with a refinement gives the
+    /// refinement's picture ([`StreamDecoder::render`]).
     ///
     /// ```
     /// use qcs::{Method, StreamDecoder};
     /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(64, 64, |x, y| image::Luma([(x ^ y) as u8])));
-    /// let bytes = qcs::encode(&img, &Default::default())?;
+    /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
+    /// let bytes = qcs::encode(&img, &levels)?;
     /// let mut dec = StreamDecoder::new(qcs::Limits::default());
     /// dec.push(&bytes)?;
     /// let first = dec.render_first(100, Method::Gouraud, 16, 16)?;
@@ -487,7 +492,7 @@ impl StreamDecoder {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
         if k >= h.total_samples {
-            if let Some(d) = self.render_refined(&h, width, height) {
+            if let Some(d) = self.render_refined(&h, width, height, false) {
                 return Ok(if d.is_final {
                     Picture::Final(d)
                 } else {
@@ -526,14 +531,17 @@ impl StreamDecoder {
         })
     }
 
-    /// A thumbnail of what has arrived (see [`DecodeOptions::thumbnail`]): from at most the
-    /// first 16 samples per output pixel, each pixel the mean of a square of pixels rendered
-    /// at its subpixel centres. A [`Picture::Preview`] unless it draws on every sample.
+    /// A thumbnail of what has arrived (see [`DecodeOptions::thumbnail`]): from the
+    /// refinement's coarse bands, or, before the refinement or in a file of levels only, from
+    /// at most the first 16 samples per output pixel, each pixel the mean of a square of
+    /// pixels rendered at its subpixel centres. A [`Picture::Preview`] unless it draws on
+    /// everything the file holds.
     ///
     /// ```
     /// use qcs::{Method, StreamDecoder};
     /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x ^ y) as u8])));
-    /// let bytes = qcs::encode(&img, &Default::default())?;
+    /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
+    /// let bytes = qcs::encode(&img, &levels)?;
     /// let mut dec = StreamDecoder::new(qcs::Limits::default());
     /// dec.push(&bytes)?;
     /// let thumb = dec.render_thumbnail(Method::Gouraud, 6, 6)?;
@@ -543,9 +551,14 @@ impl StreamDecoder {
     /// ```
     pub fn render_thumbnail(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
         self.check_output_size(width, height)?;
-        if self.refinement.is_some() {
-            // The refinement's picture at a smaller size is already the mean over each pixel.
-            return self.render(method, width, height);
+        if let Some(h) = self.header.clone() {
+            if let Some(d) = self.render_refined(&h, width, height, true) {
+                return Ok(if d.is_final {
+                    Picture::Final(d)
+                } else {
+                    Picture::Preview(d)
+                });
+            }
         }
         let k = self.sample_count().min(thumbnail_samples(width, height));
         let f = thumbnail_factor(k, width, height, &self.limits);
@@ -556,12 +569,22 @@ impl StreamDecoder {
         })
     }
 
-    /// The refinement's picture, once its header has arrived.
-    fn render_refined(&mut self, h: &Header, width: u32, height: u32) -> Option<DecodedImage> {
+    /// The refinement's picture (or a thumbnail of it), once its header has arrived.
+    fn render_refined(
+        &mut self,
+        h: &Header,
+        width: u32,
+        height: u32,
+        thumbnail: bool,
+    ) -> Option<DecodedImage> {
         let complete = self.is_complete();
         let icc = self.icc_profile().map(<[u8]>::to_vec);
         let r = self.refinement.as_mut()?;
-        let pixels = r.render(width, height);
+        let pixels = if thumbnail {
+            r.render_thumbnail(width, height)
+        } else {
+            r.render(width, height)
+        };
         Some(DecodedImage {
             image: to_image(h.layout, width, height, pixels),
             samples_used: h.total_samples,
@@ -612,6 +635,7 @@ impl StreamDecoder {
     /// rather than built again. A one-shot decode's last step: the decoder is consumed, so
     /// that what the picture no longer needs (the colour decoder's state, the sites, the
     /// cells' insertion structure) is freed before the picture is allocated.
+    #[allow(clippy::too_many_arguments)]
     fn render_prefix(
         mut self,
         k: u64,
@@ -619,11 +643,12 @@ impl StreamDecoder {
         width: u32,
         height: u32,
         seed: Option<SampleSet>,
+        thumbnail: bool,
     ) -> Result<DecodedImage> {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
         if k >= h.total_samples {
-            if let Some(d) = self.render_refined(&h, width, height) {
+            if let Some(d) = self.render_refined(&h, width, height, thumbnail) {
                 return Ok(d);
             }
         }
@@ -758,25 +783,35 @@ fn shrink(mut d: DecodedImage, f: u32) -> DecodedImage {
 
 impl DecodeOptions {
     /// Options for a `width × height` thumbnail: a picture much smaller than the image, as
-    /// close to an area-averaged downscale of it as the samples allow, at a cost that grows
+    /// close to an area-averaged downscale of it as the file allows, at a cost that grows
     /// with the thumbnail, not the file.
     ///
-    /// It draws on at most the first 16 samples per output pixel (any prefix of a file is
+    /// With a refinement (format version 3), it decodes only the coarse bands: those of the
+    /// deepest transform level at least twice the thumbnail's size (a 1/8-size thumbnail
+    /// decodes 1/16 of the coefficients), draws the picture two levels finer with the bands
+    /// between taken as zero, and averages it over each thumbnail pixel. The spec's picture at
+    /// that size ([`DecodeOptions::size`] alone) is the image-size picture averaged over each
+    /// pixel, which decodes every band; the two differ by about 40 dB PSNR (README,
+    /// *Thumbnails*).
+    ///
+    /// From levels only (a version-2 file, or a prefix that ends before the refinement), it
+    /// draws on at most the first 16 samples per output pixel (any prefix of a file is
     /// spread evenly over the image, so they are a coarser sampling of the whole picture; the
     /// rest of the file is read only to check it), renders them at f × f times the size, f²
     /// about the samples per output pixel (1 to 4), and averages each f × f square into a
-    /// pixel. The plain render at the pixel centres ([`DecodeOptions::default`], the spec's
-    /// picture) aliases once samples are denser than the output pixels: each centre picks up
-    /// the detail at that one point. Measured in the README (8 photographs, mean PSNR
-    /// against `image`'s area-averaged downscale, Gouraud): at 1/8 of their size 40.1 dB
-    /// against 28.1 dB for the plain render, at 1/16 39.9 against 23.9 dB; a 120 × 90
-    /// thumbnail of a 12-megapixel file in a fraction of the plain render's time. A file
-    /// with more samples than [`Limits::max_samples`] has a thumbnail when the levels it
-    /// draws on fit in the limit.
+    /// pixel. The plain render at the pixel centres aliases once samples are denser than the
+    /// output pixels: each centre picks up the detail at that one point. A file with more
+    /// samples than [`Limits::max_samples`] has a thumbnail when the levels it draws on fit in
+    /// the limit.
     ///
     /// ```
     /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x * y) as u8])));
     /// let bytes = qcs::encode(&img, &Default::default())?;
+    /// let thumb = qcs::decode(&bytes, &qcs::DecodeOptions::thumbnail(12, 12))?;
+    /// assert!(thumb.refined && thumb.is_final && thumb.image.width() == 12);
+    /// // From the levels of a version-2 file: 16 samples per thumbnail pixel.
+    /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
+    /// let bytes = qcs::encode(&img, &levels)?;
     /// let thumb = qcs::decode(&bytes, &qcs::DecodeOptions::thumbnail(6, 6))?;
     /// assert_eq!((thumb.image.width(), thumb.samples_used), (6, 16 * 6 * 6));
     /// # Ok::<(), qcs::Error>(())
@@ -819,8 +854,8 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
             .recover(opts.recover)
             .decode_before(max_samples),
     );
-    if let Some((w, h)) = opts.size {
-        dec = dec.with_size_hint(w, h);
+    if let (true, Some((w, h))) = (opts.thumbnail, opts.size) {
+        dec = dec.with_thumbnail_size(w, h);
     }
     let build_cells = opts.method == Method::Gouraud && rayon::current_num_threads() > 1;
     let seed = push_whole(&mut dec, bytes, max_samples, build_cells)?;
@@ -828,11 +863,11 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     let (w, ht) = opts.size.unwrap_or((h.width, h.height));
     let k = max_samples.min(dec.samples_available());
     if !opts.thumbnail || dec.refinement.is_some() {
-        return dec.render_prefix(k, opts.method, w, ht, seed);
+        return dec.render_prefix(k, opts.method, w, ht, seed, opts.thumbnail);
     }
     dec.check_output_size(w, ht)?;
     let f = thumbnail_factor(k, w, ht, &opts.limits);
-    let d = dec.render_prefix(k, opts.method, w * f, ht * f, seed)?;
+    let d = dec.render_prefix(k, opts.method, w * f, ht * f, seed, false)?;
     Ok(shrink(d, f))
 }
 

@@ -13,7 +13,7 @@ use crate::coding::raw::{self, RawDecoder};
 use crate::container::{self, Coding, Header, Layout, Parser, ParserOptions};
 use crate::sampling::{SampleColour, SourceImage};
 use crate::sites::{Frame, Quasicrystal};
-use crate::{Cadence, DecodeOptions, EncodeOptions, Error, Limits, Method, Previews};
+use crate::{Cadence, DecodeOptions, EncodeOptions, Error, Limits, Method, Previews, Target};
 use crate::{Picture, StreamDecoder};
 
 /// The limits every harness decodes with: small images, few samples, little metadata.
@@ -465,8 +465,11 @@ fn h_too_big(parsed: &Result<(Header, usize), container::FormatError>) -> bool {
 /// A round trip: control bytes `[w, h, layout, bits, n, first level, colour rule, frame]`, then
 /// pixels (cycled). Encodes the small image, decodes it and checks exactly what must hold: the
 /// decode is final with N samples; every sample colour is the encoder's sample colour quantised
-/// to B bits and back; a constant image decodes to its (quantised) constant everywhere, by every
-/// method; and a prefix cut anywhere after the header decodes to a picture.
+/// to B bits and back; a prefix cut anywhere after the header decodes to a picture. The top two
+/// bits of `bits` choose the target: levels only (a constant image then decodes to its
+/// quantised constant everywhere, by every method), lossless (every pixel exact), a quality
+/// (byte `n`, a constant image decodes to within 1 of its constant from quality 50 on), or a
+/// size (the file is no larger than asked, when that leaves room for the levels).
 ///
 /// ```
 /// qcs::fuzzing::roundtrip(b"\x07\x05\x02\x04\x30\x03\x00\x00pixels");
@@ -511,7 +514,14 @@ pub fn roundtrip(data: &[u8]) {
         }
     });
     let image = to_image(layout, w, h, pixels.clone());
+    let target = match byte(ctl, 3) >> 6 {
+        0 => Target::LevelsOnly,
+        1 => Target::Lossless,
+        2 => Target::Quality(byte(ctl, 4) % 101),
+        _ => Target::Size(byte(ctl, 4) as u64 * 4),
+    };
     let opts = EncodeOptions {
+        target,
         samples: Some(n),
         coding: Coding::Raw { bits },
         colour,
@@ -520,6 +530,20 @@ pub fn roundtrip(data: &[u8]) {
         ..Default::default()
     };
     let file = crate::encode(&image, &opts).expect("encoding a small image");
+    let levels_only = EncodeOptions {
+        target: Target::LevelsOnly,
+        ..opts.clone()
+    };
+    if let Target::Size(size) = target {
+        let base = crate::encode(&image, &levels_only).expect("encoding a small image");
+        if size as usize >= base.len() + 64 {
+            assert!(
+                file.len() as u64 <= size,
+                "{} bytes for a target of {size}",
+                file.len()
+            );
+        }
+    }
 
     // Independent expectation of the sample colours: the sampling rule at the sites, quantised.
     let q = Quasicrystal::with_frame(w, h, frame.unwrap_or_else(|| Frame::default_for(w, h)))
@@ -541,7 +565,35 @@ pub fn roundtrip(data: &[u8]) {
     assert_eq!(rd.colours(), &expected[..], "sample colours");
 
     let constant = pixels.chunks(c).all(|p| p == &pixels[..c]);
-    for method in METHODS {
+    if target != Target::LevelsOnly {
+        let d = crate::decode(
+            &file,
+            &DecodeOptions {
+                limits: limits(),
+                ..Default::default()
+            },
+        )
+        .expect("decoding what was encoded");
+        assert!(d.is_final && d.refined && d.samples_used == n);
+        assert_eq!((d.image.width(), d.image.height()), (w, h));
+        let got = d.image.as_bytes();
+        match target {
+            Target::Lossless => assert!(got == &pixels[..], "lossless decodes to other pixels"),
+            Target::Quality(q) if constant && q >= 50 => assert!(
+                got.iter()
+                    .zip(pixels.iter())
+                    .all(|(&a, &b)| a.abs_diff(b) <= 1),
+                "quality {q}: constant image {:?} decodes to other colours",
+                &pixels[..c]
+            ),
+            _ => {}
+        }
+    }
+    for method in METHODS
+        .iter()
+        .copied()
+        .filter(|_| target == Target::LevelsOnly)
+    {
         let d = crate::decode(
             &file,
             &DecodeOptions {

@@ -9,7 +9,7 @@ use std::io::Read;
 /// When [`Previews`] yields a picture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cadence {
-    /// After every completed level (and at the end of the stream).
+    /// After every completed level and refinement layer (and at the end of the stream).
     PerLevel,
     /// After every `K` bytes read (and at the end of the stream), however the reader splits
     /// them.
@@ -26,11 +26,11 @@ pub enum Cadence {
 ///
 /// ```
 /// use qcs::{Cadence, Method, Previews};
-/// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(48, 32, |x, y| image::Rgb([x as u8 * 5, y as u8 * 7, 128])));
-/// let opts = qcs::EncodeOptions { first_level: 8, ..Default::default() };
-/// let bytes = qcs::encode(&img, &opts)?;
+/// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(96, 64, |x, y| image::Rgb([x as u8 * 2, y as u8 * 3, (x * y) as u8])));
+/// let bytes = qcs::encode(&img, &qcs::EncodeOptions::default())?;
 /// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, Method::Gouraud, None, qcs::Limits::default())
 ///     .collect::<Result<_, _>>()?;
+/// // A picture for the level of samples and one per layer of the refinement.
 /// assert!(pics.len() > 3);
 /// assert!(pics.last().unwrap().is_final());
 /// assert!(pics[..pics.len() - 1].iter().all(|p| !p.is_final()));
@@ -100,7 +100,8 @@ impl<R: Read> Previews<R> {
     /// ```
     /// use qcs::{Cadence, Method, Previews};
     /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x ^ y) as u8])));
-    /// let bytes = qcs::encode(&img, &Default::default())?; // 2304 samples
+    /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
+    /// let bytes = qcs::encode(&img, &levels)?; // 2304 samples
     /// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, Method::Gouraud, Some((6, 6)), qcs::Limits::default())
     ///     .thumbnails()
     ///     .collect::<Result<_, _>>()?;
@@ -114,7 +115,8 @@ impl<R: Read> Previews<R> {
             // Nothing read yet: decode only what the thumbnails draw on.
             let (w, h) = self.size.unwrap_or((u32::MAX, u32::MAX));
             let opts = ParserOptions::with_limits(self.limits.clone());
-            self.decoder = StreamDecoder::with_options(opts.decode_before(thumbnail_samples(w, h)));
+            self.decoder = StreamDecoder::with_options(opts.decode_before(thumbnail_samples(w, h)))
+                .with_thumbnail_size(w, h);
         }
         self
     }
@@ -144,11 +146,16 @@ impl<R: Read> Previews<R> {
         Some(r)
     }
 
+    /// Levels and refinement layers complete.
+    fn parts(&self) -> u32 {
+        self.decoder.levels_complete() + self.decoder.layers_complete()
+    }
+
     /// Whether every sample the pictures draw on has arrived and is verified: no later byte
     /// can change the picture.
     fn done(&self) -> bool {
         match (self.thumbnail, self.size(), self.decoder.header()) {
-            (true, Some((w, h)), Some(head)) => {
+            (true, Some((w, h)), Some(head)) if !head.refinement => {
                 let uses = head.total_samples.min(thumbnail_samples(w, h));
                 self.decoder.samples_verified() >= uses
             }
@@ -212,10 +219,10 @@ impl<R: Read> Iterator for Previews<R> {
                     }
                     due
                 }
-                Cadence::PerLevel => self.decoder.levels_complete() > self.levels_seen,
+                Cadence::PerLevel => self.parts() > self.levels_seen,
             };
             if due {
-                self.levels_seen = self.decoder.levels_complete();
+                self.levels_seen = self.parts();
                 if let Some(p) = self.picture() {
                     return Some(p);
                 }

@@ -34,7 +34,7 @@ fn encode_info_decode() {
     assert!(text.contains("480×320"), "{text}");
     assert!(text.contains("end: a complete file"), "{text}");
     let cut = scratch("rocket-cut.qcs");
-    std::fs::write(&cut, &std::fs::read(&file).expect("read")[..40]).expect("write");
+    std::fs::write(&cut, &std::fs::read(&file).expect("read")[..20]).expect("write");
     let info = run(qcs().arg("info").arg(&cut));
     let text = String::from_utf8_lossy(&info.stdout);
     assert!(text.contains("end: inside chunk #0 'L' at byte "), "{text}");
@@ -218,7 +218,13 @@ fn last_frame(dir: &std::path::Path) -> PathBuf {
 /// says so; `--no-thumbnail` renders every sample at its pixel centres.
 #[test]
 fn small_outputs_are_thumbnails() {
-    let file = rocket_qcs("thumb.qcs");
+    // Thumbnails of the levels' samples: a file of levels only.
+    let file = scratch("thumb.qcs");
+    assert!(run(qcs()
+        .args(["-q", "encode", "--levels-only", ROCKET])
+        .arg(&file))
+    .status
+    .success());
     let bytes = std::fs::read(&file).expect("read");
     let total = qcs::container::inspect(&bytes)
         .header

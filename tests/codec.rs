@@ -2,6 +2,16 @@
 
 use qcs::{decode, encode, DecodeOptions, EncodeOptions, Error, Method, StreamDecoder};
 
+/// A file of quasicrystal levels only (format version 2), at the levels' own quality 75:
+/// what these tests of the levels' pictures are about.
+fn levels_only() -> EncodeOptions {
+    EncodeOptions {
+        target: qcs::Target::LevelsOnly,
+        coding: qcs::coding::predictive::Params::default().coding(),
+        ..Default::default()
+    }
+}
+
 fn photo(name: &str) -> image::DynamicImage {
     image::open(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).expect("test image")
 }
@@ -201,7 +211,7 @@ fn streaming_renders_equal_one_shot_decodes_of_the_same_prefix() {
 /// level beyond it is still an error.
 #[test]
 fn capped_decodes_equal_decodes_of_the_levels_they_need() {
-    let bytes = encode(&photo("coffee-150x100.png"), &EncodeOptions::default()).unwrap();
+    let bytes = encode(&photo("coffee-150x100.png"), &levels_only()).unwrap();
     let levels = qcs::container::inspect(&bytes).levels;
     // The byte where each level's chunk ends: the next one's start, or the end of the file.
     let ends: Vec<usize> = (levels.iter().skip(1))
@@ -245,7 +255,7 @@ fn capped_decodes_equal_decodes_of_the_levels_they_need() {
 /// decodes fit, and is the picture a decode without the limit gives.
 #[test]
 fn capped_decodes_need_only_their_levels_within_the_limits() {
-    let bytes = encode(&photo("coffee-150x100.png"), &EncodeOptions::default()).unwrap();
+    let bytes = encode(&photo("coffee-150x100.png"), &levels_only()).unwrap();
     let levels = qcs::container::inspect(&bytes).levels;
     let n = levels.last().unwrap().samples.end;
     let limit = levels[levels.len() - 2].samples.end; // all but the last level
@@ -305,7 +315,7 @@ fn capped_decodes_need_only_their_levels_within_the_limits() {
 fn thumbnails_average_a_finer_render_of_a_prefix() {
     for name in ["coffee-150x100.png", "astronaut-128x128.png"] {
         let img = photo(name);
-        let bytes = encode(&img, &EncodeOptions::default()).unwrap();
+        let bytes = encode(&img, &levels_only()).unwrap();
         let total = qcs::container::inspect(&bytes)
             .header
             .unwrap()

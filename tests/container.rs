@@ -233,21 +233,30 @@ fn arb_header() -> impl Strategy<Value = Header> {
         coding,
         lattice,
         any::<bool>(),
+        any::<bool>(),
     )
-        .prop_map(|(w, h, layout, n, l0, coding, lattice, defaults)| Header {
-            width: w,
-            height: h,
-            layout,
-            // Sometimes the values of the format byte's defaults bit.
-            total_samples: if defaults {
-                (u64::from(w) * u64::from(h) / 4).max(1)
-            } else {
-                n
+        .prop_map(
+            |(w, h, layout, n, l0, coding, lattice, defaults, refinement)| Header {
+                width: w,
+                height: h,
+                layout,
+                // Sometimes the values of the format byte's defaults bit: in version 2 one
+                // sample per 4 pixels from 127, in version 3 one level of 64.
+                total_samples: match (defaults, refinement) {
+                    (true, false) => (u64::from(w) * u64::from(h) / 4).max(1),
+                    (true, true) => (u64::from(w) * u64::from(h)).min(64),
+                    _ => n,
+                },
+                first_level: match (defaults, refinement) {
+                    (true, false) => 127,
+                    (true, true) => 64,
+                    _ => l0,
+                },
+                coding,
+                lattice,
+                refinement,
             },
-            first_level: if defaults { 127 } else { l0 },
-            coding,
-            lattice,
-        })
+        )
 }
 
 proptest! {
@@ -328,12 +337,13 @@ fn header_rules() {
         h[i] = b;
         with_check(h)
     };
-    // Another version: rejected as soon as the format byte arrives.
-    let e = format_err(parse_all(&with(2, 0x62)[..3], Default::default()).2);
-    assert_eq!(e, FormatError::UnsupportedVersion { version: 3 });
-    // The pre-release layout "qcs" 0x01 is named as version 1.
-    let e = format_err(parse_all(b"qcs\x01\x00\x05", Default::default()).2);
-    assert_eq!(e, FormatError::UnsupportedVersion { version: 1 });
+    // Another version: rejected as soon as the format byte arrives (2 and 3 are read).
+    for version in [0u8, 1, 4, 7] {
+        let e = format_err(parse_all(&with(2, version << 5 | 2)[..3], Default::default()).2);
+        assert_eq!(e, FormatError::UnsupportedVersion { version });
+    }
+    // "qcs" 0x01 (a pre-release layout) starts a version-3 header like any other.
+    assert!(parse_all(b"qcs\x01", Default::default()).2.is_ok());
     // Bad magic after one byte.
     let e = format_err(parse_all(b"Q", Default::default()).2);
     assert_eq!(

@@ -26,8 +26,10 @@ fn psnr(a: &[u8], b: &[u8]) -> f64 {
     10.0 * (255.0f64 * 255.0 / mse.max(1e-12)).log10()
 }
 
+/// Levels only (format version 2): these tests compare the levels' codings.
 fn raw8() -> EncodeOptions {
     EncodeOptions {
+        target: qcs::Target::LevelsOnly,
         coding: Coding::Raw { bits: 8 },
         ..Default::default()
     }
@@ -35,6 +37,7 @@ fn raw8() -> EncodeOptions {
 
 fn predictive(params: Params) -> EncodeOptions {
     EncodeOptions {
+        target: qcs::Target::LevelsOnly,
         coding: params.coding(),
         ..Default::default()
     }

@@ -614,6 +614,11 @@ fn vectors_through_every_harness() {
         [7, 5, 2, 4, 48, 3, 3, 0],
         [23, 23, 3, 0, 255, 15, 1, 9],
         [23, 19, 2, 8, 0, 0x80, 3, 0], // the encoder's N and L0: the header's defaults bit
+        // With a refinement: lossless, quality 75 and 20, a size of 400 bytes.
+        [23, 19, 3, 0x47, 20, 3, 4, 0],
+        [9, 13, 0, 0x85, 75, 1, 0, 0],
+        [16, 16, 2, 0x81, 20, 0x80, 1, 0],
+        [23, 23, 3, 0xC6, 100, 2, 2, 0],
     ] {
         let mut d = ctl.to_vec();
         d.extend_from_slice(b"some pixels \x00\xff\x80");

@@ -67,6 +67,7 @@ fn vectors() -> Vec<Vector> {
         DynamicImage::ImageRgba8(image::RgbaImage::from_raw(w, h, pattern(w, h, 4)).unwrap())
     };
     let base = |n, bits| EncodeOptions {
+        target: qcs::Target::LevelsOnly,
         samples: Some(n),
         coding: Coding::Raw { bits },
         first_level: 8,
@@ -126,10 +127,14 @@ fn vectors() -> Vec<Vector> {
         },
         Vector {
             name: "rgb-predictive-defaults",
-            what: "RGB, the encoder's defaults: predictive at quality 75, fitted colours, 1 sample per 4 px and \
-                   L0 = 127, so the header leaves both fields out (format byte bit 3)",
+            what: "RGB, levels only (version 2) at that version's defaults: predictive at quality 75, fitted \
+                   colours, 1 sample per 4 px and L0 = 127, so the header leaves both fields out (format byte bit 3)",
             image: rgb(48, 48),
-            opts: EncodeOptions::default(),
+            opts: EncodeOptions {
+                target: qcs::Target::LevelsOnly,
+                coding: qcs::coding::predictive::Params::from_quality(75).coding(),
+                ..Default::default()
+            },
         },
         Vector {
             name: "grey-predictive-lossless",

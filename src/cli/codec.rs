@@ -63,13 +63,20 @@ pub struct EncodeArgs {
     /// Raw coding (coding 0) at this many bits per channel, 1–8, instead of the predictive coding.
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8), conflicts_with_all = ["quality", "lossless"])]
     pub bits: Option<u8>,
-    /// Predictive coding (coding 1) at this quality, 0–100 (the default, at 75): luma step
-    /// 1 + ((100 − Q)² + 50)/100, chroma step 2·step − 1 (100 = lossless).
+    /// Quality, 0–100 (default 85), as cjpeg's and cwebp's: how faithful the whole file is.
+    /// With --levels-only, the quality of the levels' predictive coding (default 75).
     #[arg(long, value_parser = clap::value_parser!(u8).range(0..=100), conflicts_with = "lossless")]
     pub quality: Option<u8>,
-    /// Predictive coding with exact sample values (step 1).
+    /// Exactly the input's pixels (with --levels-only: exact sample values).
     #[arg(long)]
     pub lossless: bool,
+    /// The best picture in at most this many bytes (the whole file).
+    #[arg(long, conflicts_with_all = ["quality", "lossless", "levels_only"])]
+    pub target_size: Option<u64>,
+    /// Only the quasicrystal levels, no refinement (a format version 2 file; one sample per
+    /// 4 pixels unless --samples or --density say otherwise).
+    #[arg(long)]
+    pub levels_only: bool,
     /// What a sample's colour is.
     #[arg(long, value_enum, default_value = "fitted")]
     pub colour: ColourArg,
@@ -94,20 +101,30 @@ fn parse_density(s: &str) -> Result<f64, String> {
 
 impl EncodeArgs {
     fn options(&self) -> EncodeOptions {
-        let params = if self.lossless {
-            qcs::coding::predictive::Params::lossless()
-        } else {
-            qcs::coding::predictive::Params::from_quality(self.quality.unwrap_or(DEFAULT_QUALITY))
-        };
-        let coding = match self.bits {
-            Some(bits) => Coding::Raw { bits },
-            None => params.coding(),
-        };
         let mut o = EncodeOptions {
             samples: self.samples,
-            coding,
             ..Default::default()
         };
+        if self.levels_only {
+            let params = if self.lossless {
+                qcs::coding::predictive::Params::lossless()
+            } else {
+                qcs::coding::predictive::Params::from_quality(
+                    self.quality.unwrap_or(DEFAULT_QUALITY),
+                )
+            };
+            o.coding = params.coding();
+            o.target = qcs::Target::LevelsOnly;
+        } else {
+            o.target = match (self.lossless, self.target_size) {
+                (true, _) => qcs::Target::Lossless,
+                (_, Some(size)) => qcs::Target::Size(size),
+                _ => qcs::Target::Quality(self.quality.unwrap_or(qcs::DEFAULT_QUALITY)),
+            };
+        }
+        if let Some(bits) = self.bits {
+            o.coding = Coding::Raw { bits };
+        }
         if let Some(d) = self.density {
             o.density = d;
         }

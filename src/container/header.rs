@@ -519,12 +519,6 @@ impl Header {
             }
         }
         let format = c.u8()?;
-        if format == b's' {
-            // `qcs` followed by 0x01: the pre-release version-1 layout.
-            if c.u8()? == 1 {
-                return Err(FormatError::UnsupportedVersion { version: 1 }.into());
-            }
-        }
         let version = format >> 5;
         if version != VERSION && version != LEVELS_ONLY_VERSION {
             return Err(FormatError::UnsupportedVersion { version }.into());

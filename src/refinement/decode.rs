@@ -104,39 +104,44 @@ impl RefinementDecoder {
         }
     }
 
-    /// Keeps only the streams a `width × height` picture needs (the others' bytes are
+    /// Keeps only the streams a `width × height` thumbnail needs (the others' bytes are
     /// dropped as they arrive, and never decoded).
-    pub(crate) fn keep_streams_for(&mut self, width: u32, height: u32) {
-        let needed = Self::streams_for(self.layout.levels, self.level_for(width, height));
-        for d in self.streams.iter_mut().skip(needed) {
+    pub(crate) fn keep_streams_for_thumbnail(&mut self, width: u32, height: u32) {
+        let (decoded, _) = self.thumbnail_levels(width, height);
+        let keep = self.streams_for(decoded);
+        for d in self.streams.iter_mut().skip(keep) {
             *d = None;
         }
     }
 
-    /// The transform level a `width × height` picture is drawn from: the deepest whose low-low
-    /// band is at least that large.
-    pub(crate) fn level_for(&self, width: u32, height: u32) -> u32 {
-        let (w, h) = (width as usize, height as usize);
+    /// The deepest transform level whose low-low band is at least `width × height`.
+    fn level_at_least(&self, width: usize, height: usize) -> u32 {
         (0..=self.layout.levels)
             .rev()
             .find(|&k| {
                 let (lw, lh) = low_size(self.layout.width, self.layout.height, k);
-                lw >= w && lh >= h
+                lw >= width && lh >= height
             })
             .unwrap_or(0)
     }
 
-    /// The streams a picture at transform level `stop` draws on.
-    pub(crate) fn streams_for(levels: u32, stop: u32) -> usize {
-        (levels - stop.min(levels)) as usize + 1
+    /// The streams a picture of transform level `level` draws on.
+    fn streams_for(&self, level: u32) -> usize {
+        (self.layout.levels - level.min(self.layout.levels)) as usize + 1
     }
 
-    /// The picture at `width × height` from the bytes received so far (interleaved, the file's
-    /// layout).
-    pub(crate) fn render(&mut self, width: u32, height: u32) -> Vec<u8> {
-        let stop = self.level_for(width, height);
-        let needed = Self::streams_for(self.layout.levels, stop);
-        for (s, d) in self.streams.iter_mut().enumerate().take(needed) {
+    /// A thumbnail's levels: the one whose bands it decodes (the deepest at least twice the
+    /// thumbnail's size), and the one it is drawn at (two finer, or the image size): the bands
+    /// between are taken as zero, and each thumbnail pixel averages the picture over its area.
+    fn thumbnail_levels(&self, width: u32, height: u32) -> (u32, u32) {
+        let decoded = self.level_at_least(2 * width as usize, 2 * height as usize);
+        (decoded, decoded.saturating_sub(2))
+    }
+
+    /// Advances the first `n` streams over the bytes received and draws the picture of
+    /// transform level `stop` from them.
+    fn picture_from(&mut self, n: usize, stop: u32) -> Vec<u8> {
+        for (s, d) in self.streams.iter_mut().enumerate().take(n) {
             if let Some(d) = d {
                 d.advance(&self.bytes[s]);
             }
@@ -145,7 +150,7 @@ impl RefinementDecoder {
             .streams
             .iter()
             .enumerate()
-            .map(|(s, d)| d.as_ref().filter(|_| s < needed).map(|d| &d.state))
+            .map(|(s, d)| d.as_ref().filter(|_| s < n).map(|d| &d.state))
             .collect();
         let src = Source {
             width: self.layout.width,
@@ -156,16 +161,39 @@ impl RefinementDecoder {
             frac: self.frac,
             prediction: &self.prediction,
         };
-        let pic = picture(&src, &states, stop);
-        let (pw, ph) = low_size(self.layout.width, self.layout.height, stop);
+        picture(&src, &states, stop)
+    }
+
+    /// The picture `picture` of transform level `level`, resampled to `width × height`.
+    fn resampled(&self, picture: &[u8], level: u32, width: u32, height: u32) -> Vec<u8> {
+        let (pw, ph) = low_size(self.layout.width, self.layout.height, level);
         resample(
-            &pic,
+            picture,
             pw,
             ph,
             self.layout.channels,
+            level,
+            (self.layout.width, self.layout.height),
             width as usize,
             height as usize,
         )
+    }
+
+    /// The picture at `width × height` from the bytes received so far (interleaved, the file's
+    /// layout): the image-size picture, averaged over each output pixel (smaller) or
+    /// interpolated (larger). This is the spec's picture.
+    pub(crate) fn render(&mut self, width: u32, height: u32) -> Vec<u8> {
+        let all = self.layout.streams();
+        let pic = self.picture_from(all, 0);
+        self.resampled(&pic, 0, width, height)
+    }
+
+    /// A thumbnail at `width × height`: about the same picture from the coarse streams only
+    /// (a 1/8-size thumbnail decodes 1/16 of the coefficients).
+    pub(crate) fn render_thumbnail(&mut self, width: u32, height: u32) -> Vec<u8> {
+        let (decoded, drawn) = self.thumbnail_levels(width, height);
+        let pic = self.picture_from(self.streams_for(decoded), drawn);
+        self.resampled(&pic, drawn, width, height)
     }
 }
 

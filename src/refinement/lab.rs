@@ -366,3 +366,22 @@ fn base_choice() {
         );
     }
 }
+
+/// Pictures at 1/2 … 1/16 of the image size against `image`'s area-averaged downscale.
+#[test]
+#[ignore]
+fn thumbnails() {
+    let files = corpus();
+    for f in [2u32, 3, 4, 6, 8, 12, 16] {
+        let mut sum = 0.0;
+        for path in &files {
+            let img = image::open(path).unwrap();
+            let bytes = crate::encode(&img, &Default::default()).unwrap();
+            let (w, h) = (img.width() / f, img.height() / f);
+            let want = img.thumbnail_exact(w, h).to_rgb8();
+            let got = crate::decode(&bytes, &crate::DecodeOptions::thumbnail(w, h)).unwrap();
+            sum += psnr(got.image.to_rgb8().as_raw(), want.as_raw());
+        }
+        println!("1/{f}: {:.2}", sum / files.len() as f64);
+    }
+}

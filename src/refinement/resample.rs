@@ -1,78 +1,90 @@
 //! Exact resampling of a picture to another size (spec/reconstruction.md, *The refined
-//! picture at other sizes*): along each axis, a smaller output averages the source over each
-//! output pixel's footprint (a box filter with exact overlaps), a larger one interpolates
-//! linearly between source pixel centres. Weights are integers, the result is rounded once.
+//! picture at other sizes*). The source is the picture of transform level k, whose sample i
+//! (along an axis) stands at the centre of image pixel i·2^k. At level 0, a smaller output
+//! averages the source over each output pixel's footprint (a box filter with exact overlaps);
+//! otherwise each output pixel centre interpolates linearly between the two nearest source
+//! samples. Weights are integers, the result is rounded once.
 
-/// Per output pixel along one axis: the source indices and integer weights, and their sum.
+/// Per output pixel along one axis: the source indices and integer weights (their sum is
+/// the pixel's divisor).
 struct Axis {
     taps: Vec<Vec<(usize, u64)>>,
-    total: u64,
 }
 
 impl Axis {
-    fn new(src: usize, dst: usize) -> Axis {
-        if dst <= src {
-            // Output pixel i covers [i·src, (i+1)·src) and source pixel x covers
-            // [x·dst, (x+1)·dst), in units of 1/(src·dst) of the image side: weights are
-            // overlaps, `src` in all.
-            let taps = (0..dst)
-                .map(|i| {
-                    let (a, b) = (i * src, (i + 1) * src);
-                    (a / dst..b.div_ceil(dst))
-                        .map(|x| {
-                            let lo = a.max(x * dst);
-                            let hi = b.min((x + 1) * dst);
-                            (x, (hi - lo) as u64)
+    /// `src` samples of level `level` of an image side of `full` pixels, to `dst` pixels.
+    ///
+    /// Sample i stands for the cell of 2^level pixels centred at the centre of pixel
+    /// i·2^level. A smaller output (`dst < src`) weighs each sample by the overlap of its cell
+    /// with the output pixel (a box filter); otherwise the output pixel's centre interpolates
+    /// linearly between the two nearest samples' centres (clamped to the first and last).
+    fn new(src: usize, dst: usize, full: usize, level: u32) -> Axis {
+        let half = 1u64 << level; // a cell is 2·half long in units of half a pixel
+        if dst < src {
+            // Coordinates in units of 1/(2·dst) pixel: output pixel j is [2j·full, 2(j+1)·full),
+            // sample i's cell [(2^(k+1)·i + 1 − 2^k)·dst, (2^(k+1)·i + 1 + 2^k)·dst).
+            let d = dst as u64;
+            let taps = (0..dst as u64)
+                .map(|j| {
+                    let (a, b) = (2 * j * full as u64, 2 * (j + 1) * full as u64);
+                    // Cells meeting [a, b): i from ⌈(a/d − 1 − half)/(2·half)⌉ on.
+                    let lo = (a / d).saturating_sub(1 + half) / (2 * half);
+                    (lo as usize..src)
+                        .map(|i| {
+                            let c0 = ((2 * half * i as u64 + 1) as i64 - half as i64) * d as i64;
+                            let c1 = (2 * half * i as u64 + 1 + half) * d;
+                            let from = (a as i64).max(c0);
+                            let to = b.min(c1) as i64;
+                            (i, (to - from).max(0) as u64, c0 >= b as i64)
                         })
-                        .filter(|&(_, w)| w > 0)
+                        .take_while(|&(_, _, past)| !past)
+                        .filter(|&(_, w, _)| w > 0)
+                        .map(|(i, w, _)| (i, w))
                         .collect()
                 })
                 .collect();
-            Axis {
-                taps,
-                total: src as u64,
-            }
-        } else {
-            // Output centre i maps to source coordinate u = ((2i + 1)·src − dst) / (2·dst)
-            // (in pixels from the first source centre), clamped to the source centres;
-            // weights are in units of 1/(2·dst).
-            let d = 2 * dst as i64;
-            let taps = (0..dst as i64)
-                .map(|i| {
-                    let num =
-                        ((2 * i + 1) * src as i64 - dst as i64).clamp(0, (src as i64 - 1) * d);
-                    let x = (num / d) as usize;
-                    let frac = (num % d) as u64;
-                    let mut t = vec![(x, d as u64 - frac)];
-                    if frac > 0 {
-                        t.push((x + 1, frac));
-                    }
-                    t
-                })
-                .collect();
-            Axis {
-                taps,
-                total: d as u64,
-            }
+            return Axis { taps };
         }
+        // Output centre j is at image coordinate (j + ½)·full/dst; sample i at i·2^k + ½: in
+        // samples, t = ((2j + 1)·full − dst) / (2·dst·2^k), clamped to the samples.
+        let d = (2 * dst as u64) << level;
+        let last = (src as u64 - 1) * d;
+        let taps = (0..dst as u64)
+            .map(|j| {
+                let num = ((2 * j + 1) * full as u64)
+                    .saturating_sub(dst as u64)
+                    .min(last);
+                let x = (num / d) as usize;
+                let frac = num % d;
+                let mut t = vec![(x, d - frac)];
+                if frac > 0 {
+                    t.push((x + 1, frac));
+                }
+                t
+            })
+            .collect();
+        Axis { taps }
     }
 }
 
-/// `pixels` (`sw × sh`, `channels` interleaved) resampled to `dw × dh`.
+/// The picture of transform level `level` (`sw × sh` samples, `channels` interleaved) of a
+/// `width × height` image, resampled to `dw × dh`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn resample(
     pixels: &[u8],
     sw: usize,
     sh: usize,
     channels: usize,
+    level: u32,
+    (width, height): (usize, usize),
     dw: usize,
     dh: usize,
 ) -> Vec<u8> {
-    if (sw, sh) == (dw, dh) {
+    if level == 0 && (sw, sh) == (dw, dh) {
         return pixels.to_vec();
     }
-    let ax = Axis::new(sw, dw);
-    let ay = Axis::new(sh, dh);
-    let total = ax.total * ay.total;
+    let ax = Axis::new(sw, dw, width, level);
+    let ay = Axis::new(sh, dh, height, level);
     let mut out = vec![0u8; dw * dh * channels];
     let mut acc = vec![0u64; channels];
     for (j, ty) in ay.taps.iter().enumerate() {
@@ -87,6 +99,8 @@ pub(crate) fn resample(
                     }
                 }
             }
+            let total: u64 =
+                ty.iter().map(|t| t.1).sum::<u64>() * tx.iter().map(|t| t.1).sum::<u64>();
             let o = (j * dw + i) * channels;
             for (c, a) in acc.iter().enumerate() {
                 out[o + c] = ((2 * a + total) / (2 * total)) as u8;
@@ -105,7 +119,7 @@ mod tests {
         // 10 20 30 41 over 50 60 70 80: (10 + 20 + 50 + 60) / 4 = 35, (30 + 41 + 70 + 80) / 4
         // = 55.25.
         let src = [10u8, 20, 30, 41, 50, 60, 70, 80];
-        assert_eq!(resample(&src, 4, 2, 1, 2, 1), vec![35, 55]);
+        assert_eq!(resample(&src, 4, 2, 1, 0, (4, 2), 2, 1), vec![35, 55]);
     }
 
     #[test]
@@ -113,8 +127,16 @@ mod tests {
         let src = vec![77u8; 13 * 7 * 3];
         for (dw, dh) in [(1, 1), (5, 3), (13, 7), (20, 11), (40, 2)] {
             assert!(
-                resample(&src, 13, 7, 3, dw, dh).iter().all(|&v| v == 77),
+                resample(&src, 13, 7, 3, 0, (13, 7), dw, dh)
+                    .iter()
+                    .all(|&v| v == 77),
                 "{dw}x{dh}"
+            );
+            assert!(
+                resample(&src, 13, 7, 3, 2, (50, 28), dw, dh)
+                    .iter()
+                    .all(|&v| v == 77),
+                "{dw}x{dh} from level 2"
             );
         }
     }
@@ -122,14 +144,23 @@ mod tests {
     #[test]
     fn enlarging_interpolates_between_centres() {
         // 2 pixels to 4: centres at 0.25 and 0.75 of the way → clamped ends, then 1/4, 3/4.
-        let out = resample(&[0u8, 100], 2, 1, 1, 4, 1);
+        let out = resample(&[0u8, 100], 2, 1, 1, 0, (2, 1), 4, 1);
         assert_eq!(out, vec![0, 25, 75, 100]);
+    }
+
+    #[test]
+    fn a_coarser_level_is_read_at_its_sample_positions() {
+        // Level 1 of an 8-pixel side: samples at the centres of pixels 0, 2, 4, 6. Four output
+        // pixels have their centres at those of pixels 0.5, 2.5, 4.5, 6.5: a quarter of the
+        // way from a sample to the next (the last clamped).
+        let out = resample(&[0u8, 40, 80, 120], 4, 1, 1, 1, (8, 1), 4, 1);
+        assert_eq!(out, vec![10, 50, 90, 120]);
     }
 
     #[test]
     fn thirds_weigh_overlaps() {
         // 3 pixels to 2: output 0 covers source 0 and half of 1.
-        let out = resample(&[0u8, 90, 180], 3, 1, 1, 2, 1);
+        let out = resample(&[0u8, 90, 180], 3, 1, 1, 0, (3, 1), 2, 1);
         assert_eq!(out, vec![30, 150]);
     }
 }
