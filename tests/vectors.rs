@@ -6,7 +6,8 @@
 //!
 //! For each vector `NAME`: `NAME.qcs`, `NAME.png` (the whole file decoded at the image's size,
 //! Gouraud) and `NAME.half.png` (the first ⌊len/2⌋ bytes decoded the same way). A decoder matches
-//! when every channel of every pixel is within ±1 of the PNG. `NAME.samples.csv` and
+//! when every channel of every pixel is within ±1 of the PNG for the levels' picture, and
+//! equal to it for the refinement's (version 3, spec/refinement.md). `NAME.samples.csv` and
 //! `NAME.half.samples.csv` list the samples each of the two reads, exactly (site, position,
 //! colour): what `spec/reference/qcs_ref.py`, a decoder written from the spec alone, checks.
 
@@ -14,10 +15,11 @@ use image::{DynamicImage, GenericImageView};
 use qcs::container::{Coding, Header};
 use qcs::sampling::SampleColour;
 use qcs::sites::Frame;
-use qcs::{DecodeOptions, EncodeOptions};
+use qcs::{DecodeOptions, EncodeOptions, Target};
 use std::path::{Path, PathBuf};
 
-/// Largest per-channel difference a conforming decoder may show.
+/// Largest per-channel difference a conforming decoder may show in the levels' picture (the
+/// refinement's is exact).
 const TOLERANCE: u8 = 1;
 
 struct Vector {
@@ -65,6 +67,12 @@ fn vectors() -> Vec<Vector> {
         |w, h| DynamicImage::ImageRgb8(image::RgbImage::from_raw(w, h, pattern(w, h, 3)).unwrap());
     let rgba = |w, h| {
         DynamicImage::ImageRgba8(image::RgbaImage::from_raw(w, h, pattern(w, h, 4)).unwrap())
+    };
+    let grey_alpha = |w, h| {
+        let mut px = pattern(w, h, 4);
+        // Grey and the alpha channel of the RGBA pattern.
+        px = px.chunks_exact(4).flat_map(|p| [p[0], p[3]]).collect();
+        DynamicImage::ImageLumaA8(image::GrayAlphaImage::from_raw(w, h, px).unwrap())
     };
     let base = |n, bits| EncodeOptions {
         target: qcs::Target::LevelsOnly,
@@ -167,6 +175,53 @@ fn vectors() -> Vec<Vector> {
                 ..base(6, 8)
             },
         },
+        Vector {
+            name: "rgb-refined-q85",
+            what: "version 3 at the encoder's defaults: 64 samples at predictive quality 40 (header defaults \
+                   bit), then a 9/7 refinement to quality 85 (a key limit)",
+            image: rgb(48, 40),
+            opts: EncodeOptions::default(),
+        },
+        Vector {
+            name: "rgb-refined-size",
+            what: "version 3, a refinement cut to fill 700 bytes (a pass count per stream)",
+            image: rgb(47, 33),
+            opts: EncodeOptions {
+                target: Target::Size(700),
+                ..Default::default()
+            },
+        },
+        Vector {
+            name: "grey-refined-lossless",
+            what: "version 3, lossless: a 5/3 refinement of every bit-plane, F = 0",
+            image: grey(37, 23),
+            opts: EncodeOptions {
+                target: Target::Lossless,
+                ..Default::default()
+            },
+        },
+        Vector {
+            name: "rgba-refined-lossless",
+            what: "version 3, lossless RGBA (alpha too), odd size",
+            image: rgba(29, 21),
+            opts: EncodeOptions {
+                target: Target::Lossless,
+                ..Default::default()
+            },
+        },
+        Vector {
+            name: "grey-alpha-refined-q90",
+            what: "version 3, grey+alpha, quality 90 over 20 raw 6-bit samples in levels of 5, 10, 5 \
+                   (the header's fields written out)",
+            image: grey_alpha(44, 30),
+            opts: EncodeOptions {
+                target: Target::Quality(90),
+                samples: Some(20),
+                first_level: 5,
+                coding: Coding::Raw { bits: 6 },
+                ..Default::default()
+            },
+        },
     ]
 }
 
@@ -235,9 +290,18 @@ fn regenerate() {
             Coding::Raw { bits } => format!("raw, B = {bits}"),
             Coding::Predictive { step } => format!("predictive, s = {step}"),
         };
+        let info = qcs::container::inspect(&bytes);
+        let refinement = match (&info.refinement, info.refinement_offset) {
+            (Some(r), Some(at)) => format!(
+                "{:?} L = {}, F = {}, {} layers, from byte {at}",
+                r.wavelet, r.levels, r.fraction_bits, r.layers
+            ),
+            _ => "—".into(),
+        };
         table.push_str(&format!(
-            "| `{}` | {}×{} | {:?} | {} | {} | {} | {} | {} | {} |\n",
+            "| `{}` | {} | {}×{} | {:?} | {} | {} | {} | {} | {} | {} | {} |\n",
             v.name,
+            h.version(),
             h.width,
             h.height,
             h.layout,
@@ -246,9 +310,10 @@ fn regenerate() {
             h.first_level,
             h.level_count(),
             header_len,
+            refinement,
             bytes.len(),
         ));
-        table.push_str(&format!("|   | {} |||||||||\n", v.what));
+        table.push_str(&format!("|   | {} |||||||||||\n", v.what));
     }
     let readme = format!(
         "# Conformance vectors\n\n\
@@ -256,24 +321,29 @@ fn regenerate() {
          Generated by `tests/vectors.rs`; do not edit by hand.\n\n\
          For each `NAME`:\n\n\
          - `NAME.qcs`: the file.\n\
-         - `NAME.png`: the whole file decoded at the image's own size with the Gouraud method.\n\
+         - `NAME.png`: the whole file decoded at the image's own size (the levels' Gouraud picture,\n  \
+           or the refinement's in version 3).\n\
          - `NAME.half.png`: the first ⌊len / 2⌋ bytes decoded the same way (a cut download: the\n  \
-           verified levels plus the complete, unverified samples of the partial level chunk).\n\
+           verified levels plus the complete, unverified samples of the partial level chunk, or\n  \
+           in version 3 the refinement's picture from the bytes of its streams received).\n\
          - `NAME.samples.csv`, `NAME.half.samples.csv`: the samples a decoder reads from the whole\n  \
            file and from its first half, exactly: `index,n0,n1,n2,n3,x,y,colour` (the site's\n  \
            lattice point, its pixel position to 6 decimals, its channels in the file's layout).\n\n\
          A decoder conforms when it reads exactly those samples (positions within 10⁻⁵ px) and\n\
-         every channel of every pixel is within ±{TOLERANCE} of the PNG. `spec/reference/` holds a\n\
-         decoder of the samples written from the spec alone, which checks itself against them.\n\
+         every channel of every pixel is within ±{TOLERANCE} of the PNG for the levels' picture\n\
+         (spec/reconstruction.md), and equal to it for the refinement's (spec/refinement.md).\n\
+         `spec/reference/` holds a decoder written from the spec alone, which checks itself\n\
+         against them.\n\
          The PNGs follow the reference reconstruction, which may still change: regenerate every\n\
          file with one command,\n\n\
          ```\nQCS_REGENERATE=1 cargo test --release --test vectors\n```\n\n\
          and review the diff. `cargo test` checks them otherwise (and that the encoder still\n\
          writes the same bytes). The sample colours are the encoder's choice:\n\
          `SampleColour::Progressive`, but the encoder's default (`SampleColour::Fitted`) in\n\
-         `rgb-predictive-defaults`. The files, not the encoder, are the reference.\n\n\
-         | name | size | layout | coding | N | L0 | levels | header bytes | file bytes |\n\
-         |---|---|---|---|---|---|---|---|---|\n{table}\n\
+         `rgb-predictive-defaults` and the version-3 vectors. The files, not the encoder, are the\n\
+         reference.\n\n\
+         | name | version | size | layout | levels' coding | N | L0 | levels | header bytes | refinement | file bytes |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n{table}\n\
          The `sites-*.csv` files are the site-sequence vectors of spec/sites.md (not part of this\n\
          set).\n"
     );
@@ -296,12 +366,14 @@ fn vectors_decode_to_their_samples_and_pngs() {
         for (half, prefix) in [("", bytes.len()), ("half.", bytes.len() / 2)] {
             let path = dir().join(format!("{}.{half}png", v.name));
             let want = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            let got = decode_png(&bytes[..prefix]);
-            let d = max_diff(&got, &want);
+            let decoded =
+                qcs::decode(&bytes[..prefix], &DecodeOptions::default()).expect("decodes");
+            let tolerance = if decoded.refined { 0 } else { TOLERANCE };
+            let d = max_diff(&decoded.image, &want);
             report.push(format!("{}.{half}png: max diff {d}", v.name));
             assert!(
-                d <= TOLERANCE,
-                "{}: max channel difference {d} > {TOLERANCE}",
+                d <= tolerance,
+                "{}: max channel difference {d} > {tolerance}",
                 path.display()
             );
             let path = dir().join(format!("{}.{half}samples.csv", v.name));
@@ -338,6 +410,11 @@ fn vectors_cover_what_the_set_promises() {
     use qcs::container::{inspect, Layout, Metadata};
     let mut layouts = Vec::new();
     let (mut bits5, mut bits8, mut frame, mut text) = (false, false, false, false);
+    // Refinements: lossy (9/7) and lossless (5/3), a key limit and counts, all four layouts,
+    // and a half picture drawn by the refinement from part of its streams.
+    let (mut lossy, mut lossless, mut by_key, mut by_count, mut half_refined) =
+        (false, false, false, false, false);
+    let mut refined_layouts = Vec::new();
     // Headers with the format byte's defaults bit and without it.
     let mut defaults = [false; 2];
     for v in vectors() {
@@ -354,6 +431,17 @@ fn vectors_cover_what_the_set_promises() {
         );
         layouts.push(h.layout);
         defaults[usize::from(bytes[2] & 0x08 != 0)] = true;
+        if let Some(r) = &ins.refinement {
+            assert_eq!(ins.layers_verified, r.layers, "{}: complete", v.name);
+            refined_layouts.push(h.layout);
+            lossy |= r.wavelet == qcs::container::Wavelet::Integer97;
+            lossless |= r.wavelet == qcs::container::Wavelet::Reversible53;
+            by_key |= matches!(r.limit, qcs::container::PassLimit::Key(_));
+            by_count |= matches!(r.limit, qcs::container::PassLimit::Counts(_));
+            let half = qcs::decode(&bytes[..bytes.len() / 2], &DecodeOptions::default())
+                .expect("half decodes");
+            half_refined |= half.refined;
+        }
         bits5 |= h.coding == Coding::Raw { bits: 5 };
         bits8 |= h.coding == Coding::Raw { bits: 8 };
         frame |= h.lattice.is_some();
@@ -366,6 +454,13 @@ fn vectors_cover_what_the_set_promises() {
         assert!(layouts.contains(&l), "{l:?} missing");
     }
     assert!(bits5 && bits8 && frame && text && defaults == [true; 2]);
+    for l in [Layout::Grey, Layout::GreyAlpha, Layout::Rgb, Layout::Rgba] {
+        assert!(
+            refined_layouts.contains(&l),
+            "{l:?} missing among the refined"
+        );
+    }
+    assert!(lossy && lossless && by_key && by_count && half_refined);
 }
 
 /// The decoder written from the spec alone (`spec/reference/qcs_ref.py`) reads exactly the

@@ -53,7 +53,8 @@ pub(crate) fn coded_channels(px: &[u8]) -> [i32; 4] {
 /// Coded channel values (centred, integer) → a pixel's layout values, clamped to 0..=255.
 #[inline]
 fn layout_values(coded: &[i32], out: &mut [u8]) {
-    let clamp = |v: i32| v.clamp(0, 255) as u8;
+    let clamp = |v: i64| v.clamp(0, 255) as u8;
+    let coded: [i64; 4] = std::array::from_fn(|c| coded.get(c).copied().unwrap_or(0) as i64);
     if out.len() >= 3 {
         let t = coded[0] + 128 - (coded[2] >> 1);
         let g = coded[2] + t;
@@ -66,7 +67,7 @@ fn layout_values(coded: &[i32], out: &mut [u8]) {
             out[3] = clamp(coded[3] + 128);
         }
     } else {
-        for (o, &v) in out.iter_mut().zip(coded) {
+        for (o, &v) in out.iter_mut().zip(&coded) {
             *o = clamp(v + 128);
         }
     }
@@ -122,7 +123,7 @@ pub(crate) fn picture(src: &Source, streams: &[Option<&StreamState>], stop: u32)
             for y in 0..b.band.h {
                 let row = (b.band.y0 + y) * w + b.band.x0;
                 for x in 0..b.band.w {
-                    plane[row + x] += b.value(x, y);
+                    plane[row + x] = plane[row + x].wrapping_add(b.value(x, y));
                 }
             }
         }

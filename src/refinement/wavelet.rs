@@ -32,13 +32,16 @@ enum Step {
 }
 
 impl Step {
+    /// The step's term, computed in 64 bits and taken modulo 2^32: exact for every file an
+    /// encoder writes, and defined (wrapping) for the rest.
     #[inline(always)]
     fn delta(self, a: i32, b: i32) -> i32 {
-        match self {
-            Step::Predict53 => -((a + b) >> 1),
-            Step::Update53 => (a + b + 2) >> 2,
-            Step::Fixed(c) => ((c as i64 * (a as i64 + b as i64) + 2048) >> 12) as i32,
-        }
+        let sum = a as i64 + b as i64;
+        (match self {
+            Step::Predict53 => -(sum >> 1),
+            Step::Update53 => (sum + 2) >> 2,
+            Step::Fixed(c) => (c as i64 * sum + 2048) >> 12,
+        }) as i32
     }
 }
 
@@ -63,18 +66,18 @@ fn lift_1d(update: bool, step: Step, s: &mut [i32], d: &mut [i32], sign: i32) {
     let (nl, nh) = (s.len(), d.len());
     if update {
         // s[i] ±= f(d[i − 1], d[i]), indices clamped to 0..nh.
-        s[0] += sign * step.delta(d[0], d[0]);
+        s[0] = s[0].wrapping_add(sign.wrapping_mul(step.delta(d[0], d[0])));
         for i in 1..nl {
             let a = d[i - 1];
             let b = d[i.min(nh - 1)];
-            s[i] += sign * step.delta(a, b);
+            s[i] = s[i].wrapping_add(sign.wrapping_mul(step.delta(a, b)));
         }
     } else {
         // d[i] ±= f(s[i], s[i + 1]), indices clamped to 0..nl.
         for i in 0..nh {
             let a = s[i];
             let b = s[(i + 1).min(nl - 1)];
-            d[i] += sign * step.delta(a, b);
+            d[i] = d[i].wrapping_add(sign.wrapping_mul(step.delta(a, b)));
         }
     }
 }
@@ -98,7 +101,7 @@ fn lift_rows(
             let a = &d_rows[ia * width..(ia + 1) * width];
             let b = &d_rows[ib * width..(ib + 1) * width];
             for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
-                *t += sign * step.delta(x, y);
+                *t = t.wrapping_add(sign.wrapping_mul(step.delta(x, y)));
             }
         }
     } else {
@@ -108,7 +111,7 @@ fn lift_rows(
             let a = &s_rows[i * width..(i + 1) * width];
             let b = &s_rows[ib * width..(ib + 1) * width];
             for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
-                *t += sign * step.delta(x, y);
+                *t = t.wrapping_add(sign.wrapping_mul(step.delta(x, y)));
             }
         }
     }
