@@ -217,9 +217,17 @@ fn check_flip(name: &str, file: &[u8], header_len: usize, spans: &[Span], at: us
             assert_eq!(chunk.offset, span.chunk.offset, "{ctx}: {e}");
             assert_eq!(chunk.index, span.chunk.index, "{ctx}: {e}");
             if at >= span.payload.start {
-                // Payload and CRC bytes are covered by the CRC only.
+                // Payload and CRC bytes are covered by the CRC only, but for a refinement
+                // layer's header and segment table, whose fields are checked as they arrive.
                 match e {
                     FormatError::ChunkCrc { chunk, .. } | FormatError::BadText { chunk, .. } => {
+                        assert_eq!(chunk, span.chunk, "{ctx}")
+                    }
+                    FormatError::BadRefinement { chunk, .. }
+                    | FormatError::RefinementVarint { chunk, .. }
+                    | FormatError::SegmentLengths { chunk, .. }
+                        if span.chunk.tag == b'R' =>
+                    {
                         assert_eq!(chunk, span.chunk, "{ctx}")
                     }
                     other => panic!("{ctx}: {other}"),

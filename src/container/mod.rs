@@ -273,6 +273,10 @@ impl FormatError {
             | FormatError::UnknownCritical { chunk }
             | FormatError::ExtraLevel { chunk }
             | FormatError::DuplicateIcc { chunk }
+            | FormatError::MisplacedLayer { chunk, .. }
+            | FormatError::BadRefinement { chunk, .. }
+            | FormatError::RefinementVarint { chunk, .. }
+            | FormatError::SegmentLengths { chunk, .. }
             | FormatError::BadText { chunk, .. } => Some(*chunk),
             _ => None,
         }

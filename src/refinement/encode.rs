@@ -19,17 +19,6 @@ pub(crate) enum Goal {
     Bytes(usize),
 }
 
-/// The refinement's transform and goal.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Params {
-    pub kernel: Kernel,
-    pub frac: u32,
-    pub levels: u32,
-    pub goal: Goal,
-    /// Bytes of refinement in the first layer (the later ones double).
-    pub first_layer: usize,
-}
-
 /// The transform levels for a `width × height` image: until the low-low band's longer side
 /// is at most 16 coefficients (at most 15 levels).
 pub(crate) fn default_levels(width: u32, height: u32) -> u32 {
@@ -113,45 +102,161 @@ fn slope_for(streams: &[CodedStream], budget: usize) -> f64 {
     hi
 }
 
-/// Codes the refinement of `pixels` (`channels` interleaved, `width × height`) over levels
-/// whose samples have fixed positions `positions` and decoded colours `colours`.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn encode(
+/// The transformed channels of a picture, before the prediction.
+#[derive(Clone, Debug)]
+pub(crate) struct Transformed {
+    pub width: usize,
+    pub height: usize,
+    pub channels: usize,
+    pub kernel: Kernel,
+    pub frac: u32,
+    pub levels: u32,
+    planes: Vec<Vec<i32>>,
+}
+
+/// Transforms `pixels` (`channels` interleaved, `width × height`).
+pub(crate) fn transform(
     pixels: &[u8],
     width: u32,
     height: u32,
     channels: usize,
-    positions: &[[i64; 2]],
-    colours: &[u8],
-    params: Params,
-) -> Encoded {
+    kernel: Kernel,
+    frac: u32,
+    levels: u32,
+) -> Transformed {
     let (w, h) = (width as usize, height as usize);
-    let Params {
-        kernel,
-        frac,
-        levels,
-        goal,
-        ..
-    } = params;
     let mut planes = to_planes(pixels, channels, frac);
-    let prediction = predict::low_band(positions, colours, channels, w, h, kernel, levels, frac);
-    let (lw, lh) = low_size(w, h, levels);
-    for (plane, pred) in planes.iter_mut().zip(&prediction) {
+    for plane in &mut planes {
         forward(kernel, plane, w, h, levels);
-        for y in 0..lh {
-            for (v, p) in plane[y * w..y * w + lw].iter_mut().zip(&pred[y * lw..]) {
-                *v -= p;
-            }
-        }
     }
-    let layout = Layout {
+    Transformed {
         width: w,
         height: h,
         channels,
         kernel,
+        frac,
         levels,
-        top: planes.iter().map(|p| bitplanes(p)).collect(),
-    };
+        planes,
+    }
+}
+
+impl Transformed {
+    /// The low-low band's prediction from levels whose samples have fixed positions
+    /// `positions` and decoded colours `colours`.
+    pub(crate) fn prediction(&self, positions: &[[i64; 2]], colours: &[u8]) -> Vec<Vec<i32>> {
+        predict::low_band(
+            positions,
+            colours,
+            self.channels,
+            self.width,
+            self.height,
+            self.kernel,
+            self.levels,
+            self.frac,
+        )
+    }
+
+    /// The planes less the prediction, and their layout.
+    fn residual(&self, prediction: &[Vec<i32>]) -> (Vec<Vec<i32>>, Layout) {
+        let (w, h) = (self.width, self.height);
+        let (lw, lh) = low_size(w, h, self.levels);
+        let mut planes = self.planes.clone();
+        for (plane, pred) in planes.iter_mut().zip(prediction) {
+            for y in 0..lh {
+                for (v, p) in plane[y * w..y * w + lw].iter_mut().zip(&pred[y * lw..]) {
+                    *v -= p;
+                }
+            }
+        }
+        let layout = Layout {
+            width: w,
+            height: h,
+            channels: self.channels,
+            kernel: self.kernel,
+            levels: self.levels,
+            top: planes.iter().map(|p| bitplanes(p)).collect(),
+        };
+        (planes, layout)
+    }
+}
+
+/// A refinement's streams coded for a look at its first bytes: see [`Early::picture`].
+pub(crate) struct Early<'a> {
+    t: &'a Transformed,
+    prediction: Vec<Vec<i32>>,
+    layout: Layout,
+    streams: Vec<CodedStream>,
+}
+
+impl Transformed {
+    /// The refinement over levels with decoded `colours` at `positions`, its passes with key
+    /// at least `key` coded.
+    pub(crate) fn early(&self, positions: &[[i64; 2]], colours: &[u8], key: i32) -> Early<'_> {
+        let prediction = self.prediction(positions, colours);
+        let (planes, layout) = self.residual(&prediction);
+        let limits = pass_limits(&layout, &PassLimit::Key(key));
+        let streams = layout
+            .stream_states(Some(&planes))
+            .into_iter()
+            .zip(&limits)
+            .map(|(mut st, &n)| {
+                let weights = pass_weights(&layout, self.frac, &st.passes);
+                encode_stream(&mut st, n, &weights)
+            })
+            .collect();
+        Early {
+            t: self,
+            prediction,
+            layout,
+            streams,
+        }
+    }
+}
+
+impl Early<'_> {
+    /// The picture a decoder draws from `budget` bytes of this refinement (its passes cut at
+    /// one slope, at pass ends).
+    pub(crate) fn picture(&self, budget: usize) -> Vec<u8> {
+        let lambda = slope_for(&self.streams, budget);
+        let decoders: Vec<super::StreamDecoder> = self
+            .layout
+            .stream_states(None)
+            .into_iter()
+            .zip(&self.streams)
+            .map(|(st, c)| {
+                let k = cut_at(c, lambda);
+                let mut d = super::StreamDecoder::new(st, k);
+                d.advance(&c.bytes[..end_of(c, k)]);
+                d
+            })
+            .collect();
+        let states: Vec<Option<&super::bitplane::StreamState>> =
+            decoders.iter().map(|d| Some(&d.state)).collect();
+        let src = super::picture::Source {
+            width: self.t.width,
+            height: self.t.height,
+            channels: self.t.channels,
+            kernel: self.t.kernel,
+            levels: self.t.levels,
+            frac: self.t.frac,
+            prediction: &self.prediction,
+        };
+        super::picture::picture(&src, &states, 0)
+    }
+}
+
+/// Codes the refinement of a picture over levels whose samples have fixed positions
+/// `positions` and decoded colours `colours`.
+pub(crate) fn encode(
+    t: &Transformed,
+    positions: &[[i64; 2]],
+    colours: &[u8],
+    goal: Goal,
+    first_layer: usize,
+) -> Encoded {
+    let prediction = t.prediction(positions, colours);
+    let (planes, layout) = t.residual(&prediction);
+    let (kernel, frac, levels, channels) = (t.kernel, t.frac, t.levels, t.channels);
     let all: Vec<usize> = layout.passes().iter().map(Vec::len).collect();
     let (limits, limit) = match goal {
         Goal::Key(k) => (pass_limits(&layout, &PassLimit::Key(k)), PassLimit::Key(k)),
@@ -173,8 +278,7 @@ pub(crate) fn encode(
         Goal::Key(_) => limit,
         Goal::Lossless => PassLimit::Counts(all.iter().map(|&n| n as u32).collect()),
         Goal::Bytes(budget) => {
-            // Layers for about log2(budget / first) doublings.
-            let layers = layer_count(budget, params.first_layer);
+            let layers = layer_count(budget, first_layer);
             let room = budget.saturating_sub(framing(layers, layout.streams()) + 8 + channels);
             let lambda = slope_for(&streams, room);
             let cuts: Vec<usize> = streams.iter().map(|s| cut_at(s, lambda)).collect();
@@ -182,7 +286,7 @@ pub(crate) fn encode(
             PassLimit::Counts(cuts.iter().map(|&n| n as u32).collect())
         }
     };
-    let layers = split_layers(&streams, params.first_layer);
+    let layers = split_layers(&streams, first_layer);
     Encoded {
         header: RefinementHeader {
             wavelet: kernel,

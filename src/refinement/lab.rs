@@ -385,3 +385,88 @@ fn thumbnails() {
         println!("1/{f}: {:.2}", sum / files.len() as f64);
     }
 }
+
+/// The refinement's first picture (its prediction alone) against the levels' Gouraud picture
+/// of the same samples, for several predictors.
+#[test]
+#[ignore]
+fn start_pictures() {
+    use crate::coding::predictive::{fixed_position, Params};
+    use crate::sites::Quasicrystal;
+    let n: u64 = std::env::var("N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(64);
+    let mut sums = [0.0f64; 4];
+    let files = corpus();
+    for path in &files {
+        let img = image::open(path).unwrap().to_rgb8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let px = img.as_raw().clone();
+        let opts = crate::EncodeOptions {
+            target: crate::Target::LevelsOnly,
+            samples: Some(n),
+            first_level: n,
+            coding: Params::from_quality(40).coding(),
+            ..Default::default()
+        };
+        let file = crate::encode(&image::DynamicImage::ImageRgb8(img.clone()), &opts).unwrap();
+        let gouraud = crate::decode(&file, &Default::default())
+            .unwrap()
+            .image
+            .to_rgb8()
+            .into_raw();
+        let mut dec = crate::StreamDecoder::new(crate::Limits::default());
+        dec.push(&file).unwrap();
+        let (sites, colours) = dec.samples(n);
+        let seq = Quasicrystal::new(w as u32, h as u32).unwrap();
+        let positions: Vec<[i64; 2]> = sites
+            .iter()
+            .map(|s| fixed_position(&seq.frame(), s.lattice))
+            .collect();
+        let colours = colours.to_vec();
+        let mut row = vec![psnr(&gouraud, &px)];
+        for levels in [5u32, 4, 3] {
+            let levels = levels.min(super::encode::default_levels(w as u32, h as u32));
+            let pred = super::predict::low_band(
+                &positions,
+                &colours,
+                3,
+                w,
+                h,
+                Kernel::Integer97,
+                levels,
+                2,
+            );
+            let src = Source {
+                width: w,
+                height: h,
+                channels: 3,
+                kernel: Kernel::Integer97,
+                levels,
+                frac: 2,
+                prediction: &pred,
+            };
+            let streams: Vec<Option<&bitplane::StreamState>> = vec![None; levels as usize + 1];
+            row.push(psnr(&picture(&src, &streams, 0), &px));
+        }
+        for (s, v) in sums.iter_mut().zip(&row) {
+            *s += v;
+        }
+        println!(
+            "{}: gouraud {:.2} start L5/4/3 {:.2} {:.2} {:.2}",
+            path.display(),
+            row[0],
+            row[1],
+            row[2],
+            row[3]
+        );
+    }
+    println!(
+        "mean: {}",
+        sums.iter()
+            .map(|v| format!("{:.2}", v / files.len() as f64))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+}

@@ -1,6 +1,9 @@
 //! Image → `.qcs` bytes: sites, sample colours, colour coding, container.
 
-use crate::coding::predictive::{fixed_position, Params, PredictiveEncoder};
+mod levels;
+mod start;
+
+use crate::coding::predictive::Params;
 use crate::container::{Coding, ContainerWriter, Header, LatticeFields, Layout, Wavelet};
 use crate::refinement::encode::{self as refine, Goal};
 use crate::sampling::{SampleColour, SourceImage};
@@ -47,8 +50,9 @@ pub const DEFAULT_QUALITY: u8 = 85;
 pub struct EncodeOptions {
     /// What the file aims at (default: quality [`DEFAULT_QUALITY`]).
     pub target: Target,
-    /// Samples in the levels N; `None` uses `density` for [`Target::LevelsOnly`], and the
-    /// encoder's choice (a first level of 64) with a refinement.
+    /// Samples in the levels N; `None` uses `density` for [`Target::LevelsOnly`], and with a
+    /// refinement lets the encoder choose: a first level of 64 samples, then each doubling
+    /// that pays for its bytes (measured on the image: spec/refinement.md §9).
     pub samples: Option<u64>,
     /// Samples per pixel when `samples` is `None` (default 1/4): N = ⌊W·H·density⌋, at least 1
     /// and at most 2^22, the default [`Limits::max_samples`](crate::Limits::max_samples), so
@@ -91,7 +95,8 @@ impl Default for EncodeOptions {
 }
 
 impl EncodeOptions {
-    /// The sample count N these options give for a `width × height` image (1 ≤ N ≤ W·H).
+    /// The sample count N these options give for a `width × height` image (1 ≤ N ≤ W·H); with
+    /// a refinement and no `samples`, the first level's (the encoder may add levels).
     pub fn sample_count(&self, width: u32, height: u32) -> u64 {
         let px = width as u64 * height as u64;
         let n = match (self.samples, self.target) {
@@ -103,6 +108,9 @@ impl EncodeOptions {
         n.clamp(1, px.max(1))
     }
 }
+
+/// Bytes in the refinement's first layer (each later one doubles).
+const FIRST_LAYER: usize = 64;
 
 /// Samples in the levels before a refinement, unless told otherwise: one level, whose first
 /// bytes are the smallest previews (about 20 samples in 32 bytes).
@@ -177,14 +185,27 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         ));
     }
     let refined = opts.target != Target::LevelsOnly;
-    let n = opts.sample_count(width, height);
     let (layout, pixels) = layout_and_pixels(image);
     let channels = layout.channels() as usize;
-    // With a refinement the levels are short: one level unless told otherwise.
-    let first_level = if refined && opts.samples.is_none() {
-        n
+    let (kernel, frac) = match opts.target {
+        Target::Lossless => (Wavelet::Reversible53, 0),
+        _ => (Wavelet::Integer97, 2),
+    };
+    // With a refinement the levels are short: the encoder decides where they stop, unless told.
+    let (n, first_level) = if refined && opts.samples.is_none() {
+        let n = start::samples_before_refinement(
+            &pixels,
+            width,
+            height,
+            layout,
+            &opts.coding,
+            opts.colour,
+            kernel,
+            frac,
+        )?;
+        (n, start::FIRST_LEVEL)
     } else {
-        opts.first_level
+        (opts.sample_count(width, height), opts.first_level)
     };
     let mut header = Header::new(width, height, layout, n, first_level, opts.coding.clone());
     header.refinement = refined;
@@ -195,50 +216,11 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             origin_y: frame.origin[1],
         });
     }
-    let sites = seq.first(n as usize);
-    let positions: Vec<_> = sites.iter().map(|s| s.pos).collect();
-    let fixed: Vec<[i64; 2]> = sites
-        .iter()
-        .map(|s| fixed_position(&frame, s.lattice))
-        .collect();
-    let mut predictive = match &opts.coding {
-        Coding::Predictive { step } => Some(PredictiveEncoder::new(
-            Params { step: *step },
-            channels as u8,
-            width,
-            height,
-        )?),
-        Coding::Raw { .. } => None,
-    };
     let source = SourceImage::new(&pixels, width, height, channels)?;
-    let colours = match opts.colour {
-        SampleColour::Fitted => {
-            let first = usize::try_from(first_level).unwrap_or(usize::MAX);
-            source.fitted(&sites, seq.frame(), first, n as usize)
-        }
-        rule => source.colours(&positions, rule, n as usize),
-    };
+    let levels = levels::code(&source, &seq, &header, opts.colour)?;
     let mut w = ContainerWriter::new(writer, &header)?;
-    // The colours a decoder reads back, which the refinement's prediction starts from.
-    let mut decoded = Vec::with_capacity(colours.len());
-    for k in 0..header.level_count() {
-        let range = header.level_range(k).expect("level below level_count");
-        let values = &colours[range.start as usize * channels..range.end as usize * channels];
-        let payload = match &opts.coding {
-            Coding::Raw { bits } => {
-                decoded.extend(values.iter().map(|&v| {
-                    crate::coding::raw::dequantise(crate::coding::raw::quantise(v, *bits), *bits)
-                }));
-                crate::coding::raw::pack(values, *bits)?
-            }
-            Coding::Predictive { .. } => match &mut predictive {
-                Some(enc) => {
-                    enc.encode_level(&fixed[range.start as usize..range.end as usize], values)?
-                }
-                None => unreachable!("predictive state exists for the predictive coding"),
-            },
-        };
-        w.write_level(&payload)?;
+    for (k, payload) in levels.payloads.iter().enumerate() {
+        w.write_level(payload)?;
         if k == 0 {
             if let Some(icc) = &opts.icc {
                 w.write_icc(icc)?;
@@ -249,27 +231,26 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         }
     }
     if refined {
-        if let Some(enc) = &predictive {
-            decoded = enc.reconstructed();
-        }
-        let (kernel, frac, goal) = match opts.target {
-            Target::Lossless => (Wavelet::Reversible53, 0, Goal::Lossless),
-            Target::Quality(q) => (Wavelet::Integer97, 2, Goal::Key(quality_key(q))),
+        let goal = match opts.target {
+            Target::Lossless => Goal::Lossless,
+            Target::Quality(q) => Goal::Key(quality_key(q)),
             Target::Size(bytes) => {
                 let used = w.bytes_written();
-                let room = usize::try_from(bytes.saturating_sub(used)).unwrap_or(usize::MAX);
-                (Wavelet::Integer97, 2, Goal::Bytes(room))
+                Goal::Bytes(usize::try_from(bytes.saturating_sub(used)).unwrap_or(usize::MAX))
             }
             Target::LevelsOnly => unreachable!("no refinement"),
         };
-        let params = refine::Params {
+        let levels_of_transform = refine::default_levels(width, height);
+        let t = refine::transform(
+            &pixels,
+            width,
+            height,
+            channels,
             kernel,
             frac,
-            levels: refine::default_levels(width, height),
-            goal,
-            first_layer: 64,
-        };
-        let coded = refine::encode(&pixels, width, height, channels, &fixed, &decoded, params);
+            levels_of_transform,
+        );
+        let coded = refine::encode(&t, &levels.fixed, &levels.decoded, goal, FIRST_LAYER);
         for layer in &coded.layers {
             let segs: Vec<&[u8]> = layer.iter().map(Vec::as_slice).collect();
             w.write_layer(&coded.header, &segs)?;
