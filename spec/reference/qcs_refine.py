@@ -559,8 +559,10 @@ def picture_of_file(data, stats=None):
     if h is None:
         return None, None, False
     if h.refinement is None or not h.refinement.header_complete:
-        _h, pic = qcs_picture.picture_of_file(data)
-        return h, pic, False
+        # the levels' picture (reconstruction.md), as qcs_picture.picture_of_file draws it
+        site_list = qcs_ref.sites(len(colours), h.W, h.H, h.L, h.Cx, h.Cy) if colours else []
+        samples = [(s["n"], c) for s, c in zip(site_list, colours)]
+        return h, qcs_picture.picture(samples, h.W, h.H, h.L, h.Cx, h.Cy, h.channels), False
     return h, refined_picture(h, colours, stats), True
 
 
