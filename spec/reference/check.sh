@@ -5,8 +5,10 @@
 # of three image sizes must equal spec/vectors/sites-*.csv. Then checks the spec-only
 # picture (qcs_picture.py, spec/reconstruction.md): for every NAME.qcs, whole and half, every
 # channel of every pixel must be within +-1 of NAME[.half].png, and the worked example of
-# reconstruction.md §6 must give its three pixels. Prints PASS/FAIL per case and exits 1 on
-# any failure. Needs python3 only.
+# reconstruction.md §6 must give its three pixels. For a version-3 file (or prefix) whose
+# refinement header is complete the picture is the refinement's (qcs_refine.py,
+# spec/refinement.md) and must equal the PNG exactly; before, it is the levels' (+-1).
+# Prints PASS/FAIL per case and exits 1 on any failure. Needs python3 only.
 set -u
 D=$(cd "$(dirname "$0")" && pwd)
 V="$D/../vectors"
@@ -59,6 +61,7 @@ python3 - "$D" "$V" <<'PY' || fail=1
 import glob, os, sys
 sys.path.insert(0, sys.argv[1])
 import qcs_picture as qp
+import qcs_refine as qr
 bad_any = False
 for f in sorted(glob.glob(os.path.join(sys.argv[2], "*.qcs"))):
     name = os.path.basename(f)[:-4]
@@ -66,7 +69,8 @@ for f in sorted(glob.glob(os.path.join(sys.argv[2], "*.qcs"))):
     for tag, cut in ((name, len(data)), (name + ".half", len(data) // 2)):
         w, h, ch, want = qp.read_png(open(os.path.join(sys.argv[2], tag + ".png"), "rb").read())
         try:
-            head, got = qp.picture_of_file(data[:cut])
+            # the refinement's picture once its header is complete, else the levels' (qcs_picture)
+            head, got, refined = qr.picture_of_file(data[:cut])
         except Exception as err:
             print("FAIL picture %s: %s: %s" % (tag, type(err).__name__, err))
             bad_any = True
@@ -76,7 +80,15 @@ for f in sorted(glob.glob(os.path.join(sys.argv[2], "*.qcs"))):
             bad_any = True
             continue
         worst, off1, first = qp.compare(want, got)
-        if first is None:
+        if refined:
+            if worst == 0:
+                print("PASS picture %s (refinement, exact)" % tag)
+            else:
+                print("FAIL picture %s (refinement, max diff %d, %d pixels off by 1)%s"
+                      % (tag, worst, off1, "" if first is None else ": first pixel off by more "
+                         "than 1: x %d, y %d, channel %d, expected %d, got %d" % first))
+                bad_any = True
+        elif first is None:
             print("PASS picture %s (max diff %d, %d pixels off by 1)" % (tag, worst, off1))
         else:
             print("FAIL picture %s (max diff %d): first pixel off by more than 1: "

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A second decoder of the `.qcs` format, version 2, written from the spec alone.
+"""A second decoder of the `.qcs` format, versions 2 and 3, written from the spec alone.
 
 Written clean-room from spec/format.md and spec/sites.md (never from the Rust code), in
 Python with the standard library only, to show that the spec suffices. It decodes the
@@ -97,11 +97,12 @@ def parse_header(buf):
     if len(buf) < 3:
         raise NeedMoreData()
     fmt = buf[2]
-    if fmt == 0x73:  # "qcs" 0x01: pre-release layout of version 1
-        raise QcsError("unsupported version 1")
+    # (a pre-release version-1 file began "qcs" 0x01: 0x73 is now a version-3 format byte
+    # like any other, and such a file fails its header check; format.md §Header)
     version = fmt >> 5
-    if version != 2:
+    if version not in (2, 3):
         raise QcsError("unsupported version %d" % version)
+    h.version = version
     h.has_lattice = bool(fmt & 0x10)
     h.defaults = bool(fmt & 0x08)
     h.coding = (fmt >> 2) & 1
@@ -111,8 +112,15 @@ def parse_header(buf):
     h.W, pos = read_varint(buf, pos, 5)
     h.H, pos = read_varint(buf, pos, 5)
     if h.defaults:
-        d = 64
-        h.L0 = 127
+        # format.md §Header, bit 3: version 2: d = 64, L0 = 127;
+        # version 3: N = min(64, W*H), L0 = 64 (one level)
+        if version == 2:
+            d = 64
+            h.L0 = 127
+        else:
+            d = None
+            h.N = min(64, h.W * h.H)
+            h.L0 = 64
     else:
         if pos >= len(buf):
             raise NeedMoreData()
@@ -120,7 +128,7 @@ def parse_header(buf):
         pos += 1
     if d == 0:
         h.N, pos = read_varint(buf, pos, 10)
-    else:
+    elif d is not None:
         h.N = max(1, h.W * h.H * d // 256)
     if not h.defaults:
         h.L0, pos = read_varint(buf, pos, 10)
@@ -145,6 +153,7 @@ def parse_header(buf):
         raise QcsError("header check byte mismatch")
     pos += 1
     h.length = pos
+    h.refinement = Refinement() if version == 3 else None
     # value rules (format.md §Header, order of checks)
     if h.W < 1 or h.H < 1 or h.N < 1 or h.L0 < 1:
         raise QcsError("W, H, N or L0 is 0")
@@ -613,6 +622,115 @@ def to_layout(vals, layout):
 
 
 # ---------------------------------------------------------------------------
+# format.md §Refinement chunks (version 3): the refinement header, segment tables
+# ---------------------------------------------------------------------------
+
+class Refinement:
+    """What the R chunks received so far say (format.md §Refinement chunks): the
+    refinement header's fields once it is complete, and per layer its segment lengths
+    and the bytes of each segment received. The meaning is refinement.md's (qcs_refine.py).
+
+    Fields once `header_complete`: wavelet (0 = 5/3, 1 = 9/7), L, F, count_mode (bit 7),
+    P (bit-planes per coded channel), layers, K (key limit) or counts (passes per stream).
+    """
+
+    def __init__(self):
+        self.header_complete = False
+        self.layers = None       # declared number of layers (once layer 0's header is read)
+        self.layer_list = []     # [(lengths, [received bytes of each segment], verified)]
+
+    def stream_passes(self, s):
+        """The number of passes of stream s: 3 sum P_c (stream 0), 9 sum P_c (others)."""
+        return (3 if s == 0 else 9) * sum(self.P)
+
+    def streams(self):
+        """The bytes received of each of the L + 1 streams: its segments in layer order."""
+        out = [bytearray() for _ in range(self.L + 1)]
+        for _lengths, segs, _verified in self.layer_list:
+            for s, seg in enumerate(segs):
+                out[s] += seg
+        return [bytes(b) for b in out]
+
+    def verified_layers(self):
+        return sum(1 for _l, _s, v in self.layer_list if v)
+
+
+def parse_layer(data, length, first, channels, ref, chunk_done):
+    """Parse an R chunk's payload (format.md §Refinement chunks). `data` is the part of the
+    payload received (at most `length` bytes), `first` is layer 0 (the refinement header
+    comes first), `chunk_done` says the chunk's CRC has arrived. Fills `ref`'s header
+    fields; returns (lengths, received segments) once the segment table is complete, else
+    None. Each check is made at the byte that completes its field; a payload that ends
+    before its table is complete is an error once the chunk is done (at its CRC)."""
+    pos = 0
+
+    def cut():
+        if len(data) >= length and chunk_done:
+            raise QcsError("R chunk payload ends before its segment table is complete")
+        raise NeedMoreData()
+
+    def byte():
+        nonlocal pos
+        if pos >= len(data):
+            cut()
+        b = data[pos]
+        pos += 1
+        return b
+
+    def varint():
+        nonlocal pos
+        try:
+            v, pos = read_varint(data, pos, 5)
+        except NeedMoreData:
+            cut()
+        return v
+
+    try:
+        if first:
+            tb = byte()
+            ref.L = tb & 15
+            ref.wavelet = (tb >> 4) & 1
+            ref.F = (tb >> 5) & 3        # F <= 3 holds by its two bits
+            ref.count_mode = bool(tb & 0x80)
+            ref.P = []
+            for _ in range(channels):
+                pc = byte()
+                if pc > 30:
+                    raise QcsError("refinement header: P_c = %d > 30" % pc)
+                ref.P.append(pc)
+            ref.layers = varint()
+            if ref.layers < 1:
+                raise QcsError("refinement header: 0 layers")
+            if ref.count_mode:
+                ref.K = None
+                ref.counts = []
+                for s in range(ref.L + 1):
+                    c = varint()
+                    if c > ref.stream_passes(s):
+                        raise QcsError("refinement header: stream %d pass count %d above its %d "
+                                       "passes" % (s, c, ref.stream_passes(s)))
+                    ref.counts.append(c)
+            else:
+                ref.counts = None
+                ref.K = unzigzag(varint())
+            ref.header_complete = True
+        n = varint()
+        if n > ref.L + 1:
+            raise QcsError("segment table: %d segments for %d streams" % (n, ref.L + 1))
+        lengths = [varint() for _ in range(n)]
+    except NeedMoreData:
+        return None
+    if sum(lengths) != length - pos:
+        raise QcsError("segment table: lengths %d, payload after the table %d"
+                       % (sum(lengths), length - pos))
+    segs = []
+    for ln in lengths:
+        segs.append(bytes(data[pos:pos + ln]))
+        pos += ln
+    return lengths, segs
+
+
+# ---------------------------------------------------------------------------
 # format.md §Layout, §Level 0, §Chunks, §Truncation
 # ---------------------------------------------------------------------------
 
@@ -624,7 +742,7 @@ def decode(buf):
         return None, [], 0
     samples = []
     verified = 0
-    st = PredictiveState(h) if h.coding == 1 else None
+    st = h.predictive = PredictiveState(h) if h.coding == 1 else None
     site_list = []  # computed lazily, up to the end of the level being decoded
     level = 0
     pos = h.length
@@ -659,20 +777,35 @@ def decode(buf):
     pos = p + length + 4
     level = 1
     chunk_index = 1
+    ref = h.refinement
+    layer = 0
     while pos < len(buf):
         tag = buf[pos]
         critical = not tag & 0x20
-        if critical and tag != 0x4C:
+        if critical and tag not in (0x4C, 0x52):
             raise QcsError("unknown critical chunk %r at %d" % (tag, pos))
         if tag == 0x4C and level >= len(h.levels):
             raise QcsError("L chunk after the last level at %d" % pos)
+        if tag == 0x52:
+            if h.version != 3:
+                raise QcsError("R chunk in a version-2 file at %d" % pos)
+            if level < len(h.levels):
+                raise QcsError("R chunk before the last level at %d" % pos)
+            if ref.layers is not None and layer >= ref.layers:
+                raise QcsError("R chunk after the last layer at %d" % pos)
         try:
             length, p = read_varint(buf, pos + 1, 5)
         except NeedMoreData:
             break
         payload = buf[p:p + length]
         complete = p + length + 4 <= len(buf)
-        if tag == 0x4C:
+        if tag == 0x52:
+            got_layer = parse_layer(payload, length, layer == 0, h.channels, ref, complete)
+            if not complete:
+                if got_layer is not None:  # its table is complete: the segments' bytes so far
+                    ref.layer_list.append(got_layer + (False,))
+                break
+        elif tag == 0x4C:
             if h.coding == 0 and length != raw_payload_length(
                     h.levels[level][1] - h.levels[level][0], h.channels, h.param):
                 raise QcsError("raw L payload length mismatch at %d" % pos)
@@ -690,6 +823,9 @@ def decode(buf):
             samples.extend(got)
             verified = len(samples)
             level += 1
+        elif tag == 0x52:
+            ref.layer_list.append(got_layer + (True,))
+            layer += 1
         elif tag == 0x69:  # i: ICC profile, at most one
             meta_icc += 1
             if meta_icc > 1:
@@ -728,6 +864,12 @@ def main(argv):
         w("%d,%d,%d,%d,%d,%.6f,%.6f,%s\n" % (i, n[0], n[1], n[2], n[3], x, y,
                                              " ".join(str(v) for v in col)))
     sys.stderr.write("samples: %d verified, %d available\n" % (verified, len(samples)))
+    ref = h.refinement
+    if ref is not None:
+        sys.stderr.write("refinement: header %s, layers %d verified of %s, %d received\n"
+                         % ("complete" if ref.header_complete else "incomplete",
+                            ref.verified_layers(), ref.layers if ref.layers else "?",
+                            len(ref.layer_list)))
 
 
 if __name__ == "__main__":
