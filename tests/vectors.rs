@@ -27,6 +27,70 @@ struct Vector {
     what: &'static str,
     image: DynamicImage,
     opts: EncodeOptions,
+    /// A file made by hand from the encoder's (see [`garbage_streams`]), instead of it.
+    craft: Option<fn(&DynamicImage, &EncodeOptions) -> Vec<u8>>,
+}
+
+impl Vector {
+    fn bytes(&self) -> Vec<u8> {
+        match self.craft {
+            Some(f) => f(&self.image, &self.opts),
+            None => qcs::encode(&self.image, &self.opts).expect("encode vector"),
+        }
+    }
+}
+
+/// A version-3 file whose levels are the encoder's and whose refinement streams are bytes no
+/// encoder writes (0xFF runs and patterns) under a header with 30 bit-planes a channel: what
+/// a decoder makes of them is still fixed by the spec (the range decoder's `hi < range`
+/// rule, the transform's 32-bit wrap-around, the clamps).
+fn garbage_streams(image: &DynamicImage, opts: &EncodeOptions) -> Vec<u8> {
+    use qcs::container::{ContainerWriter, PassLimit, RefinementHeader, Wavelet};
+    let levels = EncodeOptions {
+        target: Target::LevelsOnly,
+        ..opts.clone()
+    };
+    let file = qcs::encode(image, &levels).expect("levels");
+    let (mut header, _) = Header::parse(&file).expect("header");
+    header.refinement = true;
+    let mut dec = qcs::StreamDecoder::new(qcs::Limits::default());
+    dec.push(&file).expect("levels decode");
+    // The levels' payloads, read back from the file's chunks.
+    let info = qcs::container::inspect(&file);
+    let mut w = ContainerWriter::new(Vec::new(), &header).expect("writer");
+    for level in &info.levels {
+        let c = level.chunk.expect("level present");
+        let start = c.offset as usize + usize::from(c.index > 0);
+        let (len, n) = qcs::container::varint::read(&file[start..], 32)
+            .expect("length")
+            .expect("complete");
+        let from = start + n;
+        w.write_level(&file[from..from + len as usize])
+            .expect("level");
+    }
+    let channels = header.layout.channels() as usize;
+    let r = RefinementHeader {
+        wavelet: Wavelet::Integer97,
+        fraction_bits: 2,
+        levels: 2,
+        bitplanes: vec![30; channels],
+        layers: 2,
+        limit: PassLimit::Key(i32::MIN),
+    };
+    let pattern = |len: usize, seed: u8| -> Vec<u8> {
+        (0..len)
+            .map(|i| match (i / 7) % 3 {
+                0 => 0xFF,
+                1 => seed.wrapping_mul(i as u8 | 1),
+                _ => 0x80 ^ i as u8,
+            })
+            .collect()
+    };
+    let (a, b, c) = (pattern(40, 3), pattern(25, 5), pattern(30, 7));
+    w.write_layer(&r, &[&a, &b]).expect("layer");
+    w.write_layer(&r, &[&c, &[0xFF; 12], &pattern(20, 9)])
+        .expect("layer");
+    w.finish().expect("finish")
 }
 
 fn dir() -> PathBuf {
@@ -88,18 +152,21 @@ fn vectors() -> Vec<Vector> {
             what: "grey, raw 8 bits, default lattice",
             image: grey(32, 24),
             opts: base(120, 8),
+            craft: None,
         },
         Vector {
             name: "rgb-8",
             what: "RGB, raw 8 bits, default lattice",
             image: rgb(40, 30),
             opts: base(150, 8),
+            craft: None,
         },
         Vector {
             name: "rgba-8",
             what: "RGBA, raw 8 bits, default lattice, alpha gradient",
             image: rgba(32, 32),
             opts: base(128, 8),
+            craft: None,
         },
         Vector {
             name: "rgb-5",
@@ -109,6 +176,7 @@ fn vectors() -> Vec<Vector> {
                 first_level: 5,
                 ..base(192, 5)
             },
+            craft: None,
         },
         Vector {
             name: "rgb-5-frame",
@@ -121,6 +189,7 @@ fn vectors() -> Vec<Vector> {
                 }),
                 ..base(160, 5)
             },
+            craft: None,
         },
         Vector {
             name: "rgb-predictive-q75",
@@ -132,6 +201,7 @@ fn vectors() -> Vec<Vector> {
                 },
                 ..base(240, 8)
             },
+            craft: None,
         },
         Vector {
             name: "rgb-predictive-defaults",
@@ -143,6 +213,7 @@ fn vectors() -> Vec<Vector> {
                 coding: qcs::coding::predictive::Params::from_quality(75).coding(),
                 ..Default::default()
             },
+            craft: None,
         },
         Vector {
             name: "grey-predictive-lossless",
@@ -152,6 +223,7 @@ fn vectors() -> Vec<Vector> {
                 coding: Coding::Predictive { step: 1 },
                 ..base(128, 8)
             },
+            craft: None,
         },
         Vector {
             name: "grey-8-text",
@@ -164,6 +236,7 @@ fn vectors() -> Vec<Vector> {
                 ],
                 ..base(72, 8)
             },
+            craft: None,
         },
         Vector {
             name: "grey-8-wide",
@@ -174,6 +247,7 @@ fn vectors() -> Vec<Vector> {
                 first_level: 1,
                 ..base(6, 8)
             },
+            craft: None,
         },
         Vector {
             name: "rgb-refined-q85",
@@ -181,6 +255,7 @@ fn vectors() -> Vec<Vector> {
                    bit), then a 9/7 refinement to quality 85 (a key limit)",
             image: rgb(48, 40),
             opts: EncodeOptions::default(),
+            craft: None,
         },
         Vector {
             name: "rgb-refined-size",
@@ -190,6 +265,7 @@ fn vectors() -> Vec<Vector> {
                 target: Target::Size(700),
                 ..Default::default()
             },
+            craft: None,
         },
         Vector {
             name: "grey-refined-lossless",
@@ -199,6 +275,7 @@ fn vectors() -> Vec<Vector> {
                 target: Target::Lossless,
                 ..Default::default()
             },
+            craft: None,
         },
         Vector {
             name: "rgba-refined-lossless",
@@ -208,6 +285,7 @@ fn vectors() -> Vec<Vector> {
                 target: Target::Lossless,
                 ..Default::default()
             },
+            craft: None,
         },
         Vector {
             name: "grey-alpha-refined-q90",
@@ -221,6 +299,48 @@ fn vectors() -> Vec<Vector> {
                 coding: Coding::Raw { bits: 6 },
                 ..Default::default()
             },
+            craft: None,
+        },
+        Vector {
+            name: "rgb-refined-blocks",
+            what: "version 3, quality 70, 96×80: three transform levels and several 32 × 32 blocks in the finest \
+                   bands (their spread order, block contexts, neighbours across blocks)",
+            image: rgb(96, 80),
+            opts: EncodeOptions {
+                target: Target::Quality(70),
+                ..Default::default()
+            },
+            craft: None,
+        },
+        Vector {
+            name: "grey-refined-thin",
+            what: "version 3, 1×40: the high halves of rows are empty, so the HL and HH bands are (their \
+                   passes count but code nothing)",
+            image: grey(1, 40),
+            opts: EncodeOptions::default(),
+            craft: None,
+        },
+        Vector {
+            name: "rgb-refined-tiny",
+            what: "version 3, 3×1: no transform level (L = 0), 3 samples (fewer than the prediction's 4 \
+                   neighbours)",
+            image: rgb(3, 1),
+            opts: EncodeOptions::default(),
+            craft: None,
+        },
+        Vector {
+            name: "rgb-refined-garbage",
+            what: "made by hand: the encoder's levels, then two layers of bytes no encoder writes under a \
+                   header of 30 bit-planes a channel (the range decoder's hi < range rule, the transform's \
+                   wrap-around, the clamps)",
+            image: rgb(40, 30),
+            opts: EncodeOptions {
+                target: Target::Quality(50),
+                samples: Some(64),
+                first_level: 64,
+                ..Default::default()
+            },
+            craft: Some(garbage_streams),
         },
     ]
 }
@@ -252,6 +372,45 @@ fn samples_csv(bytes: &[u8]) -> String {
     out
 }
 
+/// The cuts listed in `NAME.cuts.csv`: every byte around the start of the refinement (its
+/// header, first segment table and first stream bytes), and about 40 more spread over the
+/// file.
+fn cuts(bytes: &[u8]) -> Vec<usize> {
+    let len = bytes.len();
+    let mut out: Vec<usize> = (0..=len).step_by(len.div_ceil(40).max(1)).collect();
+    if let Some(at) = qcs::container::inspect(bytes).refinement_offset {
+        let at = at as usize;
+        out.extend(at.saturating_sub(4)..=(at + 64).min(len));
+    }
+    out.push(len);
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// `bytes,samples,refined,crc32` for each cut of [`cuts`]: the samples a decoder reads, whether
+/// the picture is the refinement's, and if so the CRC-32 of its pixels (the layout's bytes,
+/// row by row), which the refinement fixes exactly.
+fn cuts_csv(bytes: &[u8]) -> String {
+    let mut out = String::from("bytes,samples,refined,crc32\n");
+    for cut in cuts(bytes) {
+        let prefix = &bytes[..cut];
+        let mut dec = qcs::StreamDecoder::new(qcs::Limits::default());
+        let samples = match dec.push(prefix) {
+            Ok(()) => dec.samples_available(),
+            Err(e) => panic!("cut {cut}: {e}"),
+        };
+        match qcs::decode(prefix, &DecodeOptions::default()) {
+            Ok(d) if d.refined => {
+                let crc = crc32fast::hash(d.image.as_bytes());
+                out += &format!("{cut},{samples},1,{crc:08x}\n");
+            }
+            _ => out += &format!("{cut},{samples},0,\n"),
+        }
+    }
+    out
+}
+
 fn write_png(path: &Path, img: &DynamicImage) {
     img.save_with_format(path, image::ImageFormat::Png)
         .unwrap_or_else(|e| panic!("writing {}: {e}", path.display()));
@@ -271,7 +430,7 @@ fn max_diff(a: &DynamicImage, b: &DynamicImage) -> u8 {
 fn regenerate() {
     let mut table = String::new();
     for v in vectors() {
-        let bytes = qcs::encode(&v.image, &v.opts).expect("encode vector");
+        let bytes = v.bytes();
         let (h, header_len) = Header::parse(&bytes).expect("own header");
         std::fs::write(dir().join(format!("{}.qcs", v.name)), &bytes).expect("write vector");
         write_png(&dir().join(format!("{}.png", v.name)), &decode_png(&bytes));
@@ -286,6 +445,8 @@ fn regenerate() {
             let path = dir().join(format!("{}.{suffix}", v.name));
             std::fs::write(path, samples_csv(&bytes[..prefix])).expect("write samples");
         }
+        std::fs::write(dir().join(format!("{}.cuts.csv", v.name)), cuts_csv(&bytes))
+            .expect("write cuts");
         let coding = match h.coding {
             Coding::Raw { bits } => format!("raw, B = {bits}"),
             Coding::Predictive { step } => format!("predictive, s = {step}"),
@@ -328,7 +489,12 @@ fn regenerate() {
            in version 3 the refinement's picture from the bytes of its streams received).\n\
          - `NAME.samples.csv`, `NAME.half.samples.csv`: the samples a decoder reads from the whole\n  \
            file and from its first half, exactly: `index,n0,n1,n2,n3,x,y,colour` (the site's\n  \
-           lattice point, its pixel position to 6 decimals, its channels in the file's layout).\n\n\
+           lattice point, its pixel position to 6 decimals, its channels in the file's layout,\n  \
+           separated by spaces).\n\
+         - `NAME.cuts.csv`: `bytes,samples,refined,crc32` for many prefixes (every byte around\n  \
+           the start of a refinement, about 40 more over the file): the samples a decoder\n  \
+           reads, whether the picture is the refinement's (1) or the levels' (0), and for the\n  \
+           refinement's the CRC-32 (format.md) of its pixels, the layout's bytes row by row.\n\n\
          A decoder conforms when it reads exactly those samples (positions within 10⁻⁵ px) and\n\
          every channel of every pixel is within ±{TOLERANCE} of the PNG for the levels' picture\n\
          (spec/reconstruction.md), and equal to it for the refinement's (spec/refinement.md).\n\
@@ -385,6 +551,14 @@ fn vectors_decode_to_their_samples_and_pngs() {
                 path.display()
             );
         }
+        let path = dir().join(format!("{}.cuts.csv", v.name));
+        let want = std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| panic!("{}: {e} (QCS_REGENERATE=1 writes it)", path.display()));
+        assert!(
+            cuts_csv(&bytes) == want,
+            "{}: another picture or sample count at some cut",
+            path.display()
+        );
     }
     eprintln!("{}", report.join("\n"));
 }
@@ -396,7 +570,7 @@ fn vectors_are_what_the_encoder_writes() {
     }
     for v in vectors() {
         let want = std::fs::read(dir().join(format!("{}.qcs", v.name))).expect("vector");
-        let got = qcs::encode(&v.image, &v.opts).expect("encode");
+        let got = v.bytes();
         assert!(
             got == want,
             "{}: the encoder writes other bytes now",
@@ -419,11 +593,11 @@ fn vectors_cover_what_the_set_promises() {
     let mut defaults = [false; 2];
     for v in vectors() {
         let bytes = std::fs::read(dir().join(format!("{}.qcs", v.name))).expect("vector");
-        assert!(bytes.len() < 4096, "{}: keep vectors tiny", v.name);
+        assert!(bytes.len() < 8192, "{}: keep vectors tiny", v.name);
         let ins = inspect(&bytes);
         assert!(ins.error.is_none(), "{}: {:?}", v.name, ins.error);
         let h = ins.header.expect("header");
-        assert!(h.width <= 48 && h.height <= 48);
+        assert!(h.width <= 96 && h.height <= 96);
         assert_eq!(
             ins.samples_verified, h.total_samples,
             "{}: complete",

@@ -104,4 +104,6 @@ print("%s picture worked example (reconstruction.md §6: %s)"
       % ("PASS" if ok else "FAIL", ", ".join("(%d,%d)=%d" % g for g in got)))
 sys.exit(bad_any or not ok)
 PY
+# Every listed prefix of every vector: samples, which picture, and the refinement's exactly.
+python3 "$D/check_cuts.py" || fail=1
 exit $fail
