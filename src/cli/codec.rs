@@ -1,11 +1,14 @@
 //! `qcs encode`, `qcs decode`, `qcs info`, `qcs demo`.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use qcs::container::Coding;
 use qcs::sampling::SampleColour;
 use qcs::{DecodeOptions, EncodeOptions, Method, StreamDecoder};
+
+use super::input::{QcsInput, ReadQcs};
+use super::{Ctx, Size};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -47,15 +50,20 @@ pub use qcs::coding::predictive::DEFAULT_QUALITY;
 
 #[derive(Args, Debug)]
 pub struct EncodeArgs {
-    /// Input image(s) or directories, then the output .qcs when encoding one file without
-    /// --out-dir (`-`: standard input or output).
-    #[arg(required = true, num_args = 1..)]
+    /// The image to encode, then the .qcs file to write, whose name must end in .qcs (`-`:
+    /// standard input or output); with --out-dir, images and folders (searched recursively).
+    #[arg(required = true, num_args = 1.., value_name = "PATHS")]
     pub paths: Vec<PathBuf>,
-    /// Encode every input into this directory (as NAME.qcs), in parallel.
+    /// The .qcs file to write, under any name but an image format's (the input is then the
+    /// only path).
+    #[arg(short, long, conflicts_with = "out_dir")]
+    pub output: Option<PathBuf>,
+    /// Encode every input into this folder (as NAME.qcs, a folder's subfolders mirrored), in
+    /// parallel.
     #[arg(long)]
     pub out_dir: Option<PathBuf>,
-    /// Total number of samples.
-    #[arg(long, conflicts_with = "density", value_parser = clap::value_parser!(u64).range(1..))]
+    /// Total number of samples (at most the image's pixels).
+    #[arg(long, conflicts_with = "density", value_parser = super::parse_count_u64)]
     pub samples: Option<u64>,
     /// Samples per pixel (default 0.25).
     #[arg(long, value_parser = parse_density)]
@@ -81,6 +89,10 @@ pub struct EncodeArgs {
     /// without a profile means anyway.
     #[arg(long)]
     pub strip_icc: bool,
+    /// Also decode the file written (whole, at full size) and print its PSNR against the
+    /// image (over RGB).
+    #[arg(long)]
+    pub psnr: bool,
 }
 
 fn parse_density(s: &str) -> Result<f64, String> {
@@ -125,39 +137,106 @@ impl EncodeArgs {
     }
 }
 
-/// What [`encode_file`] wrote: the input's and the output's size, and the size of the ICC
-/// profile stored, if any.
+/// What [`encode_file`] made: the summary `qcs encode` prints.
+///
+/// (Room for what later formats add, such as where the levels end or the size aimed at.)
 struct Encoded {
-    input: u64,
+    /// The input's size in bytes (unknown for standard input).
+    input: Option<u64>,
+    /// The output's size in bytes.
     output: u64,
+    /// The image's size and the file's header.
+    width: u32,
+    height: u32,
+    header: Option<qcs::container::Header>,
+    /// The size of the ICC profile stored, if any.
     icc: Option<usize>,
-    /// The samples the density asked for, when they were capped at the default limit.
+    /// The samples the density asked for, when they were capped at the sample limit.
     capped_from: Option<u64>,
+    /// With `--psnr`: the PSNR of the whole file decoded at full size, in dB.
+    psnr: Option<f64>,
 }
 
+impl Encoded {
+    /// One line: what was made, from what, and how well.
+    fn summary(&self, input: &Path, output: &Path) -> String {
+        use std::fmt::Write as _;
+        let mut s = format!("{} → {}: ", input.display(), output.display());
+        let (w, h) = (self.width, self.height);
+        let px = (w as f64 * h as f64).max(1.0);
+        let bits = self.output as f64 * 8.0;
+        if let Some(hd) = &self.header {
+            let _ = write!(
+                s,
+                "{w}×{h} {:?}, {} samples in {} levels, {}; ",
+                hd.layout,
+                hd.total_samples,
+                hd.level_count(),
+                hd.coding
+            );
+        }
+        let _ = write!(s, "{} bytes", self.output);
+        if let Some(n) = self.input {
+            let _ = write!(s, " (from {n})");
+        }
+        let _ = write!(s, ", {:.3} bits per pixel", bits / px);
+        if let Some(hd) = &self.header {
+            let _ = write!(
+                s,
+                ", {:.2} per sample",
+                bits / hd.total_samples.max(1) as f64
+            );
+        }
+        if let Some(p) = self.psnr {
+            let _ = write!(s, ", PSNR {p:.2} dB");
+        }
+        if let Some(n) = self.icc {
+            let _ = write!(s, " (with its {n}-byte ICC profile)");
+        }
+        s
+    }
+}
+
+/// Encodes the image `input` into `output`, with the checks `qcs decode` (with the same
+/// limits) would apply to the file.
 fn encode_file(
     input: &Path,
     output: &Path,
     opts: &EncodeOptions,
-    (strip_icc, density_given): (bool, bool),
+    (strip_icc, density_given, psnr): (bool, bool, bool),
+    ctx: &Ctx,
 ) -> Result<Encoded> {
-    let (img, icc) = super::read_image(input)?;
+    let (img, icc) = super::read_image(input, ctx)?;
     let mut opts = opts.clone();
     opts.icc = icc.filter(|icc| !strip_icc && !super::is_srgb(icc));
-    // A file `qcs decode` would refuse (default limits) is not worth writing.
-    let limits = qcs::Limits::default();
+    // A file `qcs decode` would refuse is not worth writing.
+    let limits = &ctx.limits;
+    let (w, h) = (img.width(), img.height());
     limits
-        .check_image(img.width() as u64, img.height() as u64)
+        .check_image(w as u64, h as u64)
         .map_err(qcs::Error::from)
         .with_context(|| format!("cannot encode {}", input.display()))?;
-    // The default density's count is capped at the limit (`EncodeOptions::density`); an
-    // explicit --samples or --density beyond it is refused.
-    let px = img.width() as u64 * img.height() as u64;
+    let px = w as u64 * h as u64;
+    if let Some(n) = opts.samples.filter(|&n| n > px) {
+        return Err(usage!(
+            "cannot encode {}: --samples {n} is more than its {px} pixels ({w}×{h})",
+            input.display()
+        ));
+    }
+    // The default density's count is capped at the sample limit; an explicit --samples or
+    // --density beyond it is refused.
     let asked = (opts.samples)
         .unwrap_or((opts.density * px as f64).floor() as u64)
         .min(px);
-    let capped = opts.samples.is_none() && !density_given && asked > limits.max_samples;
-    let capped_from = capped.then_some(asked);
+    let explicit = opts.samples.is_some() || density_given;
+    // The encoder itself stops the default density at the default limit.
+    let capped = !explicit && asked > limits.max_samples.min(qcs::Limits::default().max_samples);
+    let mut capped_from = None;
+    if capped {
+        let n = asked.min(limits.max_samples);
+        opts.samples = Some(n);
+        capped_from = (n < asked).then_some(asked);
+    }
     limits
         .check_samples(if capped { 0 } else { asked })
         .map_err(qcs::Error::from)
@@ -186,21 +265,34 @@ fn encode_file(
         })?;
     let bytes =
         qcs::encode(&img, &opts).with_context(|| format!("cannot encode {}", input.display()))?;
+    let psnr = match psnr {
+        false => None,
+        true => {
+            let d = qcs::decode(
+                &bytes,
+                &DecodeOptions {
+                    limits: limits.clone(),
+                    ..Default::default()
+                },
+            )
+            .with_context(|| format!("cannot decode what {} became", input.display()))?;
+            Some(qcs::eval::psnr(&img.to_rgb8(), &d.image.to_rgb8())?)
+        }
+    };
     super::write_output(output, &bytes)?;
     Ok(Encoded {
-        input: std::fs::metadata(input).map_or(0, |m| m.len()),
+        input: match super::is_stdio(input) {
+            true => None,
+            false => std::fs::metadata(input).ok().map(|m| m.len()),
+        },
         output: bytes.len() as u64,
+        width: w,
+        height: h,
+        header: qcs::container::Header::parse(&bytes).ok().map(|(h, _)| h),
         icc: opts.icc.as_ref().map(Vec::len),
         capped_from,
+        psnr,
     })
-}
-
-fn out_path(dir: &Path, input: &Path) -> PathBuf {
-    let stem = input
-        .file_stem()
-        .map(|s| s.to_os_string())
-        .unwrap_or_default();
-    dir.join(stem).with_extension("qcs")
 }
 
 /// Whether `a` and `b` name the same existing file.
@@ -212,101 +304,181 @@ fn same_file(a: &Path, b: &Path) -> bool {
 }
 
 fn is_image(p: &Path) -> bool {
-    let ext = p
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    image::ImageFormat::from_extension(&ext).is_some()
+    image::ImageFormat::from_path(p).is_ok()
 }
 
-pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
-    let opts = a.options();
-    let flags = (a.strip_icc, a.density.is_some());
-    let Some(dir) = &a.out_dir else {
-        if a.paths.len() != 2 {
-            bail!(
-                "give one input and one output (IN OUT.qcs), or use --out-dir DIR for many inputs"
-            );
-        }
-        if same_file(&a.paths[0], &a.paths[1]) {
-            bail!(
-                "the output {} is the input image: give an output such as OUT.qcs",
-                a.paths[1].display()
-            );
-        }
-        super::check_output(&a.paths[1])?;
-        let e = encode_file(&a.paths[0], &a.paths[1], &opts, flags)?;
-        if !quiet {
-            eprintln!(
-                "{} → {}: {}{} bytes{}",
-                a.paths[0].display(),
-                a.paths[1].display(),
-                // Standard input has no size to tell.
-                match super::is_stdio(&a.paths[0]) {
-                    true => String::new(),
-                    false => format!("{} → ", e.input),
-                },
-                e.output,
-                e.icc
-                    .map(|n| format!(" (with its {n}-byte ICC profile)"))
-                    .unwrap_or_default()
-            );
-            if let Some(asked) = e.capped_from {
-                eprintln!(
-                    "  {} samples, not the {asked} of the density: the most `qcs decode` takes \
-                     by default",
-                    qcs::Limits::default().max_samples
-                );
+/// The images in the folder `dir` and its subfolders (by extension), sorted, each with its
+/// path relative to `dir`.
+fn images_in(dir: &Path) -> Result<Vec<(PathBuf, PathBuf)>> {
+    let mut found = Vec::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).with_context(|| format!("cannot list {}", d.display()))? {
+            let p = e
+                .with_context(|| format!("cannot list {}", d.display()))?
+                .path();
+            if p.is_dir() {
+                todo.push(p);
+            } else if p.is_file() && is_image(&p) {
+                let rel = p.strip_prefix(dir).unwrap_or(&p).to_path_buf();
+                found.push((p, rel));
             }
         }
-        return Ok(());
+    }
+    found.sort();
+    Ok(found)
+}
+
+/// Refuses to write .qcs data under a name that says it is an image.
+fn refuse_image_name(out: &Path) -> Result<()> {
+    if let Ok(f) = image::ImageFormat::from_path(out) {
+        return Err(usage!(
+            "{} names a {f:?} image: not writing .qcs data into it (give a name ending in .qcs)",
+            out.display()
+        ));
+    }
+    Ok(())
+}
+
+pub fn encode(a: EncodeArgs, ctx: &Ctx) -> Result<()> {
+    let opts = a.options();
+    let flags = (a.strip_icc, a.density.is_some(), a.psnr);
+    if let Some(dir) = &a.out_dir {
+        return encode_many(&a, dir, &opts, flags, ctx);
+    }
+    let (input, output) = match (&a.output, a.paths.as_slice()) {
+        (Some(o), [i]) => {
+            refuse_image_name(o)?;
+            (i, o)
+        }
+        (Some(_), _) => {
+            return Err(usage!(
+                "with -o, give one input image; to encode several, use --out-dir DIR"
+            ))
+        }
+        (None, [i]) => {
+            return Err(usage!(
+                "no output: give one (qcs encode {} OUT.qcs, or -o OUT), or --out-dir DIR",
+                i.display()
+            ))
+        }
+        (None, [i, o]) => {
+            if !super::is_stdio(o) && !super::has_qcs_extension(o) {
+                return Err(usage!(
+                    "{} does not end in .qcs: not writing .qcs data into it{}. Give OUT.qcs \
+                     (or -o NAME), or --out-dir DIR to encode several images",
+                    o.display(),
+                    if o.exists() { " (it exists)" } else { "" }
+                ));
+            }
+            (i, o)
+        }
+        (None, many) => {
+            return Err(usage!(
+                "{} paths: give one input and one output (IN OUT.qcs), or --out-dir DIR to \
+                 encode several images",
+                many.len()
+            ))
+        }
     };
-    if a.paths.iter().any(|p| super::is_stdio(p)) {
-        bail!(
-            "standard input (-) is one image: encode it without --out-dir (qcs encode - OUT.qcs)"
+    if same_file(input, output) {
+        return Err(usage!(
+            "the output {} is the input image: give an output such as OUT.qcs",
+            output.display()
+        ));
+    }
+    super::check_output(output)?;
+    let e = encode_file(input, output, &opts, flags, ctx)?;
+    if let Some(asked) = e.capped_from {
+        eprintln_unless(
+            ctx.quiet,
+            format!(
+                "qcs: {}: {} samples, fewer than the {asked} of the density: the most \
+                 `qcs decode` takes (--max-samples)",
+                input.display(),
+                ctx.limits.max_samples
+            ),
         );
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut inputs = Vec::new();
+    eprintln_unless(ctx.quiet, e.summary(input, output));
+    Ok(())
+}
+
+/// Prints `msg` on standard error unless `quiet`.
+fn eprintln_unless(quiet: bool, msg: impl std::fmt::Display) {
+    if !quiet {
+        eprintln!("{msg}");
+    }
+}
+
+fn encode_many(
+    a: &EncodeArgs,
+    dir: &Path,
+    opts: &EncodeOptions,
+    flags: (bool, bool, bool),
+    ctx: &Ctx,
+) -> Result<()> {
+    if a.paths.iter().any(|p| super::is_stdio(p)) {
+        return Err(usage!(
+            "standard input (-) is one image: encode it without --out-dir (qcs encode - OUT.qcs)"
+        ));
+    }
+    // Every input and where it goes.
+    let mut jobs: Vec<(PathBuf, PathBuf)> = Vec::new();
     for p in &a.paths {
         if p.is_dir() {
-            let mut v: Vec<PathBuf> = std::fs::read_dir(p)
-                .with_context(|| format!("cannot list {}", p.display()))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file() && is_image(p))
-                .collect();
-            v.sort();
-            inputs.extend(v);
+            for (img, rel) in images_in(p)? {
+                jobs.push((img, dir.join(rel).with_extension("qcs")));
+            }
         } else {
-            inputs.push(p.clone());
+            let stem = p.file_stem().unwrap_or_default();
+            jobs.push((p.clone(), dir.join(stem).with_extension("qcs")));
         }
     }
+    if jobs.is_empty() {
+        return Err(usage!(
+            "nothing to encode: no image files (.png, .jpg, … by extension) in {}",
+            a.paths
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     let mut seen = std::collections::HashMap::new();
-    for p in &inputs {
-        let out = out_path(dir, p);
+    for (p, out) in &jobs {
         if let Some(prev) = seen.insert(out.clone(), p.clone()) {
-            bail!(
+            return Err(usage!(
                 "{} and {} would both be written to {}",
                 prev.display(),
                 p.display(),
                 out.display()
-            );
+            ));
+        }
+    }
+    for (_, out) in &jobs {
+        if let Some(d) = out.parent() {
+            std::fs::create_dir_all(d).with_context(|| format!("cannot create {}", d.display()))?;
         }
     }
     let start = Instant::now();
-    let bar = if quiet {
+    let bar = if ctx.quiet {
         ProgressBar::hidden()
     } else {
-        ProgressBar::new(inputs.len() as u64)
+        ProgressBar::new(jobs.len() as u64)
     };
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}").expect("valid template"),
     );
-    let results: Vec<Result<Encoded>> = inputs
+    let results: Vec<Result<Encoded>> = jobs
         .par_iter()
-        .map(|p| {
-            let r = encode_file(p, &out_path(dir, p), &opts, flags);
+        .map(|(p, out)| {
+            let r = encode_file(p, out, opts, flags, ctx);
+            if let Ok(e) = &r {
+                if !ctx.quiet {
+                    bar.println(e.summary(p, out));
+                }
+            }
             bar.inc(1);
             r
         })
@@ -314,18 +486,21 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
     bar.finish_and_clear();
     let (mut ok, mut bin, mut bout) = (0, 0, 0);
     let mut first_err = None;
-    for (p, r) in inputs.iter().zip(results) {
+    for ((p, _), r) in jobs.iter().zip(results) {
         match r {
             Ok(e) => {
                 ok += 1;
-                bin += e.input;
+                bin += e.input.unwrap_or(0);
                 bout += e.output;
-                if e.capped_from.is_some() && !quiet {
-                    eprintln!(
-                        "qcs: {}: {} samples, fewer than the density's: the most `qcs decode` \
-                         takes by default",
-                        p.display(),
-                        qcs::Limits::default().max_samples
+                if let Some(asked) = e.capped_from {
+                    eprintln_unless(
+                        ctx.quiet,
+                        format!(
+                            "qcs: {}: {} samples, fewer than the {asked} of the density: the \
+                             most `qcs decode` takes (--max-samples)",
+                            p.display(),
+                            ctx.limits.max_samples
+                        ),
                     );
                 }
             }
@@ -335,18 +510,19 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
             }
         }
     }
-    if !quiet {
-        eprintln!(
+    eprintln_unless(
+        ctx.quiet,
+        format!(
             "{ok} of {} files encoded, {bin} bytes in, {bout} bytes out, {:.2} s",
-            inputs.len(),
+            jobs.len(),
             start.elapsed().as_secs_f64()
-        );
-    }
+        ),
+    );
     match first_err {
         Some(e) => Err(e.context(format!(
             "{} of {} files failed",
-            inputs.len() - ok,
-            inputs.len()
+            jobs.len() - ok,
+            jobs.len()
         ))),
         None => Ok(()),
     }
@@ -354,7 +530,7 @@ pub fn encode(a: EncodeArgs, quiet: bool) -> Result<()> {
 
 #[derive(Args, Debug)]
 pub struct DecodeArgs {
-    /// The .qcs file (`-`: standard input, read to its end).
+    /// The .qcs file (`-`: standard input).
     pub input: PathBuf,
     /// The output image (PNG, JPEG, … by extension; `-`: PNG on standard output); optional
     /// with --frames.
@@ -362,14 +538,15 @@ pub struct DecodeArgs {
     /// Reconstruction method.
     #[arg(long, value_enum, default_value = "gouraud")]
     pub method: MethodArg,
-    /// Output size WxH (default: the image's own size).
+    /// Output size: WxH exactly, or W, Wx or xH keeping the aspect ratio (default: the
+    /// image's own size).
     #[arg(long, value_parser = super::parse_size, conflicts_with = "scale")]
-    pub size: Option<(u32, u32)>,
+    pub size: Option<Size>,
     /// Output scale factor.
     #[arg(long, value_parser = super::parse_scale)]
     pub scale: Option<f64>,
-    /// Use at most N samples.
-    #[arg(long, conflicts_with_all = ["bytes", "frames"])]
+    /// Use at most N samples (N ≥ 1).
+    #[arg(long, conflicts_with_all = ["bytes", "frames"], value_parser = super::parse_count_u64)]
     pub samples: Option<u64>,
     /// Render at the output's pixel centres from every sample (or --samples), even for an
     /// output much smaller than the image, which is otherwise a thumbnail: from the first
@@ -377,9 +554,10 @@ pub struct DecodeArgs {
     /// and faster).
     #[arg(long)]
     pub no_thumbnail: bool,
-    /// Use only the first K bytes of the file, as a cut download would.
-    #[arg(long)]
-    pub bytes: Option<usize>,
+    /// Use only the first K bytes of the file, as a cut download would: no more is read (K,
+    /// M, G suffixes: binary multiples).
+    #[arg(long, value_name = "K", value_parser = super::parse_byte_count)]
+    pub bytes: Option<u64>,
     /// Write a preview PNG into DIR every --every bytes (default: at each level), up to
     /// --bytes if given.
     #[arg(long)]
@@ -387,92 +565,186 @@ pub struct DecodeArgs {
     /// With --frames: bytes between previews.
     #[arg(long, requires = "frames", value_parser = super::parse_count)]
     pub every: Option<usize>,
-    /// Return the longest verified prefix of a damaged file instead of failing.
+    /// With --frames: the most frames to write (`none` lifts the cap); more is refused
+    /// before any is written.
+    #[arg(long, requires = "frames", value_name = "N", value_parser = super::parse_limit, default_value = "100")]
+    pub max_frames: u64,
+    /// Keep the longest verified prefix of a damaged file instead of failing; what was
+    /// damaged, where, and what was kept is said on standard error.
     #[arg(long)]
     pub recover: bool,
 }
 
-fn output_size(size: Option<(u32, u32)>, scale: Option<f64>, w: u32, h: u32) -> (u32, u32) {
-    // `--scale` is finite and above 0 (clap checks it).
-    let f = scale.unwrap_or(1.0);
-    size.unwrap_or((
-        ((w as f64 * f).round() as u32).max(1),
-        ((h as f64 * f).round() as u32).max(1),
-    ))
-}
-
-/// The file's header, as `qcs::decode` reports a file that has none: it sets the default
-/// output size before the decode, which checks it against the limits.
-fn header(bytes: &[u8]) -> qcs::Result<qcs::container::Header> {
-    match qcs::container::Header::parse(bytes) {
-        Ok((h, _)) => Ok(h),
-        Err(qcs::container::FormatError::TruncatedHeader { .. }) => Err(qcs::Error::NeedMoreData),
-        Err(e) => Err(qcs::Error::Format(e)),
+fn output_size(size: Option<Size>, scale: Option<f64>, w: u32, h: u32) -> (u32, u32) {
+    match (size, scale) {
+        (Some(s), _) => s.resolve(w, h),
+        // `--scale` is finite and above 0 (clap checks it).
+        (None, f) => {
+            let f = f.unwrap_or(1.0);
+            (
+                ((w as f64 * f).round() as u32).max(1),
+                ((h as f64 * f).round() as u32).max(1),
+            )
+        }
     }
 }
 
 /// A stream decoder for pictures of `size`: one that decodes only the samples a thumbnail of
 /// that size draws on when `thumbnail` (so it also takes a file with more samples than the
 /// limits allow, if its first levels fit).
-fn stream_decoder(size: (u32, u32), thumbnail: bool, recover: bool) -> StreamDecoder {
-    let opts = qcs::container::ParserOptions::with_limits(qcs::Limits::default()).recover(recover);
+fn stream_decoder(size: (u32, u32), thumbnail: bool, recover: bool, ctx: &Ctx) -> StreamDecoder {
+    let opts = qcs::container::ParserOptions::with_limits(ctx.limits.clone()).recover(recover);
     StreamDecoder::with_options(match thumbnail {
         true => opts.decode_before(qcs::thumbnail_samples(size.0, size.1)),
         false => opts,
     })
 }
 
-pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
-    let bytes = super::read_input(&a.input)?;
-    let ctx = || format!("cannot decode {}", a.input.display());
+/// Checks that the samples a decode stopping at sample `k` decodes are within the limits,
+/// with a hint at what decodes fewer.
+fn check_decoded_samples(h: &qcs::container::Header, k: u64, ctx: &Ctx) -> Result<()> {
+    let n = super::input::samples_of_levels_before(h, k);
+    ctx.limits
+        .check_samples(n)
+        .map_err(qcs::Error::from)
+        .context(
+            "a smaller output (--size or --scale) or --samples N decodes only the samples it \
+             needs; --max-samples raises the limit",
+        )
+}
+
+/// A neutral grey picture: what a file that ends inside its header shows (spec/format.md,
+/// Truncation: nothing to show yet, not an error).
+fn grey(size: (u32, u32)) -> image::DynamicImage {
+    image::DynamicImage::ImageLuma8(image::GrayImage::from_pixel(
+        size.0,
+        size.1,
+        image::Luma([128]),
+    ))
+}
+
+/// Says on standard error (even with `--quiet`: the picture is not the whole file) what
+/// `--recover` dropped; an error if nothing before the damage could be kept.
+fn report_damage(
+    input: &Path,
+    damage: &qcs::container::FormatError,
+    h: &qcs::container::Header,
+    verified: u64,
+    levels: u32,
+) -> Result<()> {
+    if verified == 0 {
+        return Err(qcs::Error::Format(damage.clone())).context(format!(
+            "{} is damaged before anything could be kept (--recover keeps only verified levels)",
+            input.display()
+        ));
+    }
+    super::warn(format!(
+        "{} is damaged: {damage}; kept what was verified before it: {verified} of {} samples \
+         ({levels} of {} levels)",
+        input.display(),
+        h.total_samples,
+        h.level_count()
+    ));
+    Ok(())
+}
+
+pub fn decode(a: DecodeArgs, ctx: &Ctx) -> Result<()> {
+    // Everything about the outputs is checked before any byte is read.
+    let Some(_) = a.output.as_ref().or(a.frames.as_ref()) else {
+        return Err(usage!("give an output image path (or --frames DIR)"));
+    };
+    if let Some(out) = &a.output {
+        super::output_format(out)?;
+    }
     if let Some(dir) = &a.frames {
-        frames(&a, &bytes, dir, quiet).with_context(ctx)?;
-        if a.output.is_none() {
-            return Ok(());
+        if dir.exists() && !dir.is_dir() {
+            return Err(usage!("--frames {}: not a folder", dir.display()));
         }
     }
-    let Some(out) = &a.output else {
-        bail!("give an output image path (or --frames DIR)")
+    let what = || format!("cannot decode {}", a.input.display());
+    let src = super::input::Source::open(&a.input)?;
+    let how = ReadQcs {
+        budget: a.bytes,
+        recover: a.recover,
     };
-    // An output the image crate cannot write is refused before the decode.
-    super::output_format(out)?;
-    let header = header(&bytes).with_context(ctx)?;
+    let input = super::input::read_qcs(src, &how, ctx, |h| {
+        let size = output_size(a.size, a.scale, h.width, h.height);
+        ctx.limits
+            .check_output(size.0 as u64, size.1 as u64)
+            .map_err(qcs::Error::from)?;
+        if a.output.is_some() {
+            check_decoded_samples(h, one_shot_samples(&a, size), ctx)?;
+        }
+        if a.frames.is_some() && a.no_thumbnail {
+            check_decoded_samples(h, u64::MAX, ctx)?;
+        }
+        Ok(())
+    })
+    .with_context(what)?;
+    let input = input.ok().with_context(what)?;
+    let Some(header) = input.header.clone() else {
+        // Nothing to show yet: a neutral grey picture (at --size, else 1 × 1).
+        let size = output_size(a.size, None, 1, 1);
+        let said = format!(
+            "neutral grey {}×{}: the {} bytes end inside the header, nothing to show yet",
+            size.0,
+            size.1,
+            input.bytes.len()
+        );
+        if let Some(dir) = &a.frames {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+            let path = dir.join(format!("frame-000-{:08}B-preview.png", input.bytes.len()));
+            super::save_image(&grey(size), &path)?;
+            eprintln_unless(ctx.quiet, format!("{}: {said}", path.display()));
+        }
+        if let Some(out) = &a.output {
+            super::save_image(&grey(size), out)?;
+            eprintln_unless(ctx.quiet, format!("{}: {said}", out.display()));
+        }
+        return Ok(());
+    };
+    if let Some(dir) = &a.frames {
+        frames(&a, &input, &header, dir, ctx).with_context(what)?;
+    }
+    let Some(out) = &a.output else {
+        return Ok(());
+    };
     let size = output_size(a.size, a.scale, header.width, header.height);
     let opts = DecodeOptions {
         method: a.method.into(),
         size: Some(size),
         max_samples: a.samples,
-        max_bytes: a.bytes,
+        max_bytes: None,
         thumbnail: !a.no_thumbnail,
         recover: a.recover,
-        ..Default::default()
+        limits: ctx.limits.clone(),
     };
-    let d = match qcs::decode(&bytes, &opts) {
-        Err(e @ qcs::Error::Limits(qcs::limits::LimitError::Samples(..))) => {
-            return Err(e).with_context(|| {
-                format!(
-                    "{} (a smaller output, --size or --scale, or --samples N decodes only the \
-                     samples it needs)",
-                    ctx()
-                )
-            })
-        }
-        d => d.with_context(ctx)?,
-    };
-    let kept = super::save_image_icc(&d.image, out, d.icc.as_deref())?;
-    if !kept && !quiet {
-        eprintln!(
-            "qcs: warning: {} cannot hold the file's ICC colour profile: its colours are not sRGB \
-             and will look wrong; write PNG, JPEG, TIFF or WebP to keep it",
-            out.display()
-        );
+    let d = qcs::decode(&input.bytes, &opts).with_context(what)?;
+    if let (Some(damage), None) = (&input.damage, &a.frames) {
+        report_damage(
+            &a.input,
+            damage,
+            &header,
+            d.samples_verified,
+            d.levels_complete,
+        )?;
     }
-    if !quiet {
-        // A thumbnail differs from the plain render from 2.25 samples per output pixel on
-        // (2 × 2 subpixels each).
-        let pixels = size.0 as f64 * size.1 as f64;
-        let thumbnail = opts.thumbnail && d.samples_used as f64 >= 2.25 * pixels;
-        eprintln!(
+    let kept = super::save_image_icc(&d.image, out, d.icc.as_deref())?;
+    if !kept {
+        super::warn(format!(
+            "{} cannot hold the file's ICC colour profile: its colours are not sRGB and will \
+             look wrong; write PNG, JPEG, TIFF or WebP to keep it",
+            out.display()
+        ));
+    }
+    // A thumbnail differs from the plain render from 2.25 samples per output pixel on
+    // (2 × 2 subpixels each).
+    let pixels = size.0 as f64 * size.1 as f64;
+    let thumbnail = opts.thumbnail && d.samples_used as f64 >= 2.25 * pixels;
+    eprintln_unless(
+        ctx.quiet,
+        format!(
             "{}: {}×{} from {} samples ({} verified, {} levels){}",
             out.display(),
             size.0,
@@ -487,18 +759,24 @@ pub fn decode(a: DecodeArgs, quiet: bool) -> Result<()> {
             } else {
                 ", preview"
             }
-        );
-    }
+        ),
+    );
     Ok(())
 }
 
-fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
-    let bytes = &bytes[..a.bytes.unwrap_or(usize::MAX).min(bytes.len())];
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let h = header(bytes)?;
-    let size = output_size(a.size, a.scale, h.width, h.height);
-    let mut dec = stream_decoder(size, !a.no_thumbnail, a.recover);
-    let mut cuts: Vec<usize> = match a.every {
+/// The samples `qcs::decode` stops at for `a` at `size` (`DecodeOptions::max_samples`, and a
+/// thumbnail's).
+fn one_shot_samples(a: &DecodeArgs, size: (u32, u32)) -> u64 {
+    let k = a.samples.unwrap_or(u64::MAX);
+    match a.no_thumbnail {
+        true => k,
+        false => k.min(qcs::thumbnail_samples(size.0, size.1)),
+    }
+}
+
+/// Where frames are cut: every `every` bytes, or at each level's end; the whole input last.
+fn cuts(bytes: &[u8], every: Option<usize>) -> Vec<usize> {
+    let mut cuts: Vec<usize> = match every {
         Some(k) => (1..)
             .map(|i| i * k)
             .take_while(|&c| c < bytes.len())
@@ -507,14 +785,42 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
     };
     cuts.push(bytes.len());
     cuts.dedup();
+    cuts
+}
+
+/// Refuses more frames than `--max-frames`, saying what would fit.
+fn check_frame_count(n: usize, len: usize, every: Option<usize>, max: u64) -> Result<()> {
+    if n as u64 <= max {
+        return Ok(());
+    }
+    let fit = match every {
+        Some(_) => format!("--every {} or more, or ", len.div_ceil(max.max(1) as usize)),
+        None => String::new(),
+    };
+    Err(usage!(
+        "{n} frames would be made, more than --max-frames {max}: use {fit}--max-frames {n} \
+         (none lifts the cap)"
+    ))
+}
+
+fn frames(
+    a: &DecodeArgs,
+    input: &QcsInput,
+    h: &qcs::container::Header,
+    dir: &Path,
+    ctx: &Ctx,
+) -> Result<()> {
+    let bytes = &input.bytes[..];
+    let cuts = cuts(bytes, a.every);
+    check_frame_count(cuts.len(), bytes.len(), a.every, a.max_frames)?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let size = output_size(a.size, a.scale, h.width, h.height);
+    let mut dec = stream_decoder(size, !a.no_thumbnail, a.recover, ctx);
     let mut fed = 0;
-    let mut n = 0;
-    for cut in cuts {
+    let mut warned = false;
+    for (n, cut) in cuts.into_iter().enumerate() {
         dec.push(&bytes[fed..cut])?;
         fed = cut;
-        if dec.header().is_none() {
-            continue;
-        }
         // Thumbnails where the output would be one, as the picture `qcs decode` writes.
         let pic = match a.no_thumbnail {
             true => dec.render(a.method.into(), size.0, size.1)?,
@@ -528,14 +834,22 @@ fn frames(a: &DecodeArgs, bytes: &[u8], dir: &Path, quiet: bool) -> Result<()> {
         };
         let path = dir.join(format!("frame-{n:03}-{cut:08}B-{kind}.png"));
         let d = pic.decoded();
-        super::save_image_icc(&d.image, &path, d.icc.as_deref())?;
-        if !quiet {
-            eprintln!("{}: {} samples", path.display(), pic.decoded().samples_used);
+        if let (Some(damage), false) = (dec.stopped(), warned) {
+            report_damage(
+                &a.input,
+                damage,
+                h,
+                dec.samples_verified(),
+                dec.levels_complete(),
+            )?;
+            warned = true;
         }
-        n += 1;
-    }
-    if n == 0 {
-        return Err(qcs::Error::NeedMoreData.into());
+        // PNG holds the ICC profile.
+        super::save_image_icc(&d.image, &path, d.icc.as_deref())?;
+        eprintln_unless(
+            ctx.quiet,
+            format!("{}: {} samples", path.display(), d.samples_used),
+        );
     }
     Ok(())
 }
@@ -563,10 +877,22 @@ pub struct InfoArgs {
     pub input: PathBuf,
 }
 
-pub fn info(a: InfoArgs) -> Result<()> {
-    let bytes = super::read_input(&a.input)?;
-    let ins = qcs::container::inspect(&bytes);
-    say!("file: {} ({} bytes)", a.input.display(), ins.file_len);
+pub fn info(a: InfoArgs, ctx: &Ctx) -> Result<()> {
+    let src = super::input::Source::open(&a.input)?;
+    let how = ReadQcs {
+        budget: None,
+        recover: true,
+    };
+    let input = super::input::read_qcs(src, &how, ctx, |_| Ok(()))?;
+    let ins = qcs::container::inspect(&input.bytes);
+    match &input.refused {
+        None => say!("file: {} ({} bytes)", a.input.display(), ins.file_len),
+        Some(_) => say!(
+            "file: {} ({} bytes read: reading stopped where it was refused)",
+            a.input.display(),
+            ins.file_len
+        ),
+    }
     if let Some(h) = &ins.header {
         say!(
             "version {}, {}×{} {:?}, {} samples, first level {}",
@@ -639,10 +965,22 @@ pub fn info(a: InfoArgs) -> Result<()> {
         ins.samples_verified,
         ins.end
     );
-    if let Some(e) = ins.error {
-        return Err(e).with_context(|| format!("{} is damaged", a.input.display()));
+    match (input.refused, ins.error) {
+        (Some(e @ qcs::Error::Limits(_)), _) => Err(e).with_context(|| {
+            format!(
+                "{} exceeds the limits `qcs decode` applies (--max-pixels, --max-samples \
+                 raise them)",
+                a.input.display()
+            )
+        }),
+        (Some(e), _) | (None, Some(e)) if ins.header.is_none() => {
+            Err(e).with_context(|| format!("{} is not a .qcs file qcs can read", a.input.display()))
+        }
+        (Some(e), _) | (None, Some(e)) => {
+            Err(e).with_context(|| format!("{} is damaged", a.input.display()))
+        }
+        (None, None) => Ok(()),
     }
-    Ok(())
 }
 
 #[derive(Args, Debug)]
@@ -652,12 +990,13 @@ pub struct DemoArgs {
     /// Directory for the .qcs file and the previews.
     pub out_dir: PathBuf,
     /// Total number of samples (default: one per 4 pixels).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_count_u64)]
     pub samples: Option<u64>,
 }
 
-pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
-    let img = super::open_image(&a.input)?;
+pub fn demo(a: DemoArgs, ctx: &Ctx) -> Result<()> {
+    let quiet = ctx.quiet;
+    let img = super::open_image(&a.input, ctx)?;
     std::fs::create_dir_all(&a.out_dir)
         .with_context(|| format!("cannot create {}", a.out_dir.display()))?;
     // The table goes to stdout only once every file is written: a reader that closes the
@@ -742,17 +1081,21 @@ pub fn demo(a: DemoArgs, quiet: bool) -> Result<()> {
 pub struct PreviewArgs {
     /// The .qcs file (`-`: standard input).
     pub input: PathBuf,
-    /// The animated GIF to write (`-`: standard output).
+    /// The animated GIF to write: its name must end in .gif (`-`: standard output).
     pub output: PathBuf,
     /// Bytes between frames (default: one frame per level).
     #[arg(long, value_parser = super::parse_count)]
     pub every: Option<usize>,
-    /// Frame size WxH (default: the image's size, at most 512 px wide).
+    /// Frame size: WxH, or W, Wx or xH keeping the aspect ratio (default: the image's size,
+    /// at most 512 px wide).
     #[arg(long, value_parser = super::parse_size)]
-    pub size: Option<(u32, u32)>,
+    pub size: Option<Size>,
     /// Delay per frame in milliseconds.
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(1..=65535))]
     pub delay_ms: u32,
+    /// The most frames to make (`none` lifts the cap); more is refused before any is drawn.
+    #[arg(long, value_name = "N", value_parser = super::parse_limit, default_value = "100")]
+    pub max_frames: u64,
 }
 
 /// 3×5 pixel digits, one row per entry, bit 2 = left column.
@@ -811,64 +1154,99 @@ fn stamp(img: &mut image::RgbaImage, text: &str) {
     }
 }
 
-pub fn preview(a: PreviewArgs, quiet: bool) -> Result<()> {
+pub fn preview(a: PreviewArgs, ctx: &Ctx) -> Result<()> {
     use image::codecs::gif::{GifEncoder, Repeat};
     use image::{Delay, Frame};
+    let gif_name = a
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+    if !super::is_stdio(&a.output) && !gif_name {
+        return Err(usage!(
+            "{}: qcs preview writes an animated GIF; give a name ending in .gif (or - for \
+             standard output)",
+            a.output.display()
+        ));
+    }
     super::check_output(&a.output)?;
-    let bytes = super::read_input(&a.input)?;
-    let ctx = || format!("cannot decode {}", a.input.display());
-    let mut cuts: Vec<usize> = match a.every {
-        Some(k) => (1..)
-            .map(|i| i * k)
-            .take_while(|&c| c < bytes.len())
-            .collect(),
-        None => level_ends(&bytes),
+    let what = || format!("cannot decode {}", a.input.display());
+    let frame_size = |h: &qcs::container::Header| {
+        a.size.map_or_else(
+            || {
+                let f = (512.0 / h.width as f64).min(1.0);
+                output_size(None, Some(f), h.width, h.height)
+            },
+            |s| s.resolve(h.width, h.height),
+        )
     };
-    cuts.push(bytes.len());
-    cuts.dedup();
+    let src = super::input::Source::open(&a.input)?;
+    let how = ReadQcs {
+        budget: None,
+        recover: false,
+    };
+    let input = super::input::read_qcs(src, &how, ctx, |h| {
+        let size = frame_size(h);
+        ctx.limits
+            .check_output(size.0 as u64, size.1 as u64)
+            .map_err(qcs::Error::from)?;
+        Ok(())
+    })
+    .with_context(what)?;
+    let input = input.ok().with_context(what)?;
+    let bytes = &input.bytes[..];
     let mut gif_bytes = Vec::new();
     let mut gif = GifEncoder::new_with_speed(&mut gif_bytes, 10);
     gif.set_repeat(Repeat::Infinite)?;
-    let h = header(&bytes).with_context(ctx)?;
-    let size = a.size.unwrap_or_else(|| {
-        let f = (512.0 / h.width as f64).min(1.0);
-        output_size(None, Some(f), h.width, h.height)
-    });
-    let mut dec = stream_decoder(size, true, false);
+    let delay = |ms: u32| Delay::from_numer_denom_ms(ms, 1);
+    let Some(h) = &input.header else {
+        // Nothing to show yet: one neutral grey frame (at --size, else 1 × 1).
+        let size = a.size.map_or((1, 1), |s| s.resolve(1, 1));
+        gif.encode_frame(Frame::from_parts(
+            grey(size).to_rgba8(),
+            0,
+            0,
+            delay(a.delay_ms),
+        ))?;
+        drop(gif);
+        super::write_output(&a.output, &gif_bytes)?;
+        eprintln_unless(
+            ctx.quiet,
+            format!(
+                "{}: 1 neutral grey frame: the {} bytes end inside the header, nothing to show yet",
+                a.output.display(),
+                bytes.len()
+            ),
+        );
+        return Ok(());
+    };
+    let cuts = cuts(bytes, a.every);
+    check_frame_count(cuts.len(), bytes.len(), a.every, a.max_frames)?;
+    let size = frame_size(h);
+    let mut dec = stream_decoder(size, true, false, ctx);
     let mut fed = 0;
     let mut frames = 0;
     for cut in cuts {
-        dec.push(&bytes[fed..cut]).with_context(ctx)?;
+        dec.push(&bytes[fed..cut]).with_context(what)?;
         fed = cut;
-        if dec.header().is_none() {
-            continue;
-        }
         // As `qcs decode` draws an output much smaller than the image.
         let pic = dec
             .render_thumbnail(Method::Gouraud, size.0, size.1)
-            .with_context(ctx)?;
+            .with_context(what)?;
         let mut rgba = pic.decoded().image.to_rgba8();
         stamp(&mut rgba, &format!("{cut}B"));
-        let delay = if dec.is_complete() {
+        let ms = if dec.is_complete() {
             a.delay_ms.saturating_mul(4)
         } else {
             a.delay_ms
         };
-        gif.encode_frame(Frame::from_parts(
-            rgba,
-            0,
-            0,
-            Delay::from_numer_denom_ms(delay, 1),
-        ))?;
+        gif.encode_frame(Frame::from_parts(rgba, 0, 0, delay(ms)))?;
         frames += 1;
     }
     drop(gif);
-    if frames == 0 {
-        return Err(qcs::Error::NeedMoreData).with_context(ctx);
-    }
     super::write_output(&a.output, &gif_bytes)?;
-    if !quiet {
-        eprintln!("{}: {frames} frames", a.output.display());
-    }
+    eprintln_unless(
+        ctx.quiet,
+        format!("{}: {frames} frames", a.output.display()),
+    );
     Ok(())
 }
