@@ -28,7 +28,11 @@ impl Source {
     /// The file `p`, or standard input for `-`.
     pub fn open(p: &Path) -> Result<Source> {
         let (rest, len): (Box<dyn Read>, _) = if is_stdio(p) {
-            (Box::new(std::io::stdin().lock()), None)
+            // Unbuffered (`Stdin` reads ahead 8 KiB): what is not read stays in the pipe.
+            use std::os::fd::AsFd;
+            let fd = (std::io::stdin().as_fd().try_clone_to_owned())
+                .context("cannot read standard input")?;
+            (Box::new(std::fs::File::from(fd)), None)
         } else {
             let f =
                 std::fs::File::open(p).with_context(|| format!("cannot read {}", p.display()))?;
@@ -123,6 +127,16 @@ fn pump(
             return Ok(());
         }
     }
+}
+
+/// Refuses a source whose first bytes are no image format the `image` crate knows, before
+/// reading the rest.
+pub fn check_image_start(src: &mut Source) -> Result<()> {
+    let head = src.peek(64)?;
+    if let Err(e) = image::guess_format(head) {
+        return Err(e).with_context(|| format!("cannot read image {}", src.path.display()));
+    }
+    Ok(())
 }
 
 /// The bytes of a file (or of standard input for `-`) to its end, refusing one longer than

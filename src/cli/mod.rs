@@ -492,10 +492,12 @@ pub fn read_image(
         )
     };
     let mut decoder = if is_stdio(p) {
-        let bytes = input::read_all(input::Source::open(p)?, ctx)?;
-        if bytes.starts_with(&qcs::container::MAGIC) {
+        let mut src = input::Source::open(p)?;
+        if src.peek(2)?.starts_with(&qcs::container::MAGIC) {
             return Err(qcs_hint(p));
         }
+        input::check_image_start(&mut src)?;
+        let bytes = input::read_all(src, ctx)?;
         by_content(
             image::ImageReader::new(std::io::Cursor::new(bytes)),
             &ctx.limits,

@@ -153,6 +153,7 @@ fn samples(a: &RenderArgs, ctx: &Ctx) -> Result<Option<Samples>> {
         .with_context(what)?;
         return qcs_samples(a, input, ctx);
     }
+    super::input::check_image_start(&mut src)?;
     let bytes = super::input::read_all(src, ctx)?;
     let img = image::load_from_memory(&bytes)
         .with_context(|| format!("cannot read image {}", a.input.display()))?
