@@ -1280,3 +1280,33 @@ fn encode_says_what_it_made() {
         std::fs::read(&two).expect("2")
     );
 }
+
+/// `qcs eval`'s PNG plots have their text (title, axis labels, ticks, legend), in the bundled
+/// font: dark pixels where the title, the axes' descriptions and the legend are drawn.
+#[test]
+fn eval_png_plots_have_their_text() {
+    let dir = scratch("eval-text");
+    let seashore = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/seashore-100x100.png"
+    );
+    let out = run(qcs()
+        .args(["-q", "eval", "--quick", seashore, "--out"])
+        .arg(&dir));
+    assert!(out.status.success(), "{out:?}");
+    let png = image::open(dir.join("curve-gouraud.png"))
+        .expect("a PNG")
+        .to_luma8();
+    assert_eq!(png.dimensions(), (900, 560));
+    let dark = |xs: std::ops::Range<u32>, ys: std::ops::Range<u32>| {
+        ys.flat_map(|y| xs.clone().map(move |x| (x, y)))
+            .filter(|&(x, y)| png.get_pixel(x, y).0[0] < 100)
+            .count()
+    };
+    // The title, centred above the chart; "samples" under it; "PSNR (dB)" along the left.
+    assert!(dark(200..700, 5..35) > 300, "no title");
+    assert!(dark(400..500, 525..555) > 30, "no x description");
+    assert!(dark(5..30, 200..360) > 30, "no y description");
+    // Tick labels left of the y axis.
+    assert!(dark(30..68, 40..500) > 200, "no y ticks");
+}
