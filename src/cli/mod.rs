@@ -1,4 +1,6 @@
-//! Command-line definitions (clap) and dispatch; one module per subcommand.
+//! Command-line definitions (clap) and dispatch, one module per subcommand; what they share
+//! (global options, exit codes, argument parsers, reading and writing files) is here and in
+//! `input` (bounded reading) and `icc`.
 
 /// `println!` that returns stdout's error (e.g. a pipe closed by `head`) instead of
 /// panicking; [`main`] ends quietly on a closed pipe.
@@ -16,8 +18,14 @@ macro_rules! usage {
     };
 }
 
-mod codec;
+mod decode;
+mod demo;
+mod encode;
+mod eval;
+mod icc;
+mod info;
 mod input;
+mod preview;
 mod render;
 mod sites;
 
@@ -105,16 +113,16 @@ pub enum Command {
         allow_negative_numbers = true,
         after_help = "Examples:\n  qcs encode photo.png photo.qcs      (the output must end in .qcs, or be -)\n  qcs encode photo.jpg -o photo.bin --samples 20000 --bits 6\n  qcs encode photo.png photo.qcs --psnr   (and the PSNR of the whole file)\n  qcs encode photos/ more/*.png --out-dir qcs/   (many files in parallel; folders recursively)\n  convert photo.tif png:- | qcs encode - - > photo.qcs   (standard input and output)"
     )]
-    Encode(codec::EncodeArgs),
+    Encode(encode::EncodeArgs),
     /// Decode a .qcs file (or a prefix of one) to an image; the format follows the extension.
     #[command(
         allow_negative_numbers = true,
         after_help = "Examples:\n  qcs decode photo.qcs photo.png\n  qcs decode photo.qcs thumb.png --size 120 --method shepard   (120 px wide)\n  qcs decode photo.qcs cut.png --bytes 2048   (as a cut download would; reads no more)\n  qcs decode photo.qcs --frames frames/ --every 4096\n  curl -s URL | qcs decode - - > photo.png   (standard input to PNG on standard output)"
     )]
-    Decode(codec::DecodeArgs),
+    Decode(decode::DecodeArgs),
     /// Show a .qcs file's header, levels (byte offsets, sample ranges) and CRC status.
     #[command(after_help = "Example:\n  qcs info photo.qcs")]
-    Info(codec::InfoArgs),
+    Info(info::InfoArgs),
     /// Print the first N sample sites of a sampler as CSV (index,x,y[,n0,n1,n2,n3]).
     #[command(
         allow_negative_numbers = true,
@@ -126,7 +134,7 @@ pub enum Command {
         allow_negative_numbers = true,
         after_help = "Examples:\n  qcs preview photo.qcs photo.gif   (the output must end in .gif, or be -)\n  qcs preview photo.qcs photo.gif --every 2048 --size 240"
     )]
-    Preview(codec::PreviewArgs),
+    Preview(preview::PreviewArgs),
     /// Render a .qcs file (or an image sampled by any strategy) in a stylized way.
     #[command(
         allow_negative_numbers = true,
@@ -138,13 +146,13 @@ pub enum Command {
         allow_negative_numbers = true,
         after_help = "Example:\n  qcs eval photos/*.png --out eval/"
     )]
-    Eval(render::EvalArgs),
+    Eval(eval::EvalArgs),
     /// Encode an image and write previews decoded from growing prefixes of its file.
     #[command(
         allow_negative_numbers = true,
         after_help = "Example:\n  qcs demo assets/rocket.png out/"
     )]
-    Demo(codec::DemoArgs),
+    Demo(demo::DemoArgs),
 }
 
 /// A refusal with one of the README's exit codes: a usage error (2) or a limit (4).
@@ -165,6 +173,13 @@ impl std::fmt::Display for Refusal {
 }
 
 impl std::error::Error for Refusal {}
+
+/// Prints `msg` on standard error unless `quiet`.
+pub fn eprintln_unless(quiet: bool, msg: impl std::fmt::Display) {
+    if !quiet {
+        eprintln!("{msg}");
+    }
+}
 
 /// Prints a warning: that the output is not what was asked for. `--quiet` does not hide it.
 pub fn warn(msg: impl std::fmt::Display) {
@@ -217,14 +232,14 @@ pub fn main() -> ExitCode {
             .build_global();
     }
     let r = match cli.command {
-        Command::Encode(a) => codec::encode(a, &ctx),
-        Command::Decode(a) => codec::decode(a, &ctx),
-        Command::Info(a) => codec::info(a, &ctx),
+        Command::Encode(a) => encode::encode(a, &ctx),
+        Command::Decode(a) => decode::decode(a, &ctx),
+        Command::Info(a) => info::info(a, &ctx),
         Command::Sites(a) => sites::run(a, &ctx),
-        Command::Demo(a) => codec::demo(a, &ctx),
-        Command::Preview(a) => codec::preview(a, &ctx),
+        Command::Demo(a) => demo::demo(a, &ctx),
+        Command::Preview(a) => preview::preview(a, &ctx),
         Command::Render(a) => render::render(a, &ctx),
-        Command::Eval(a) => render::eval(a, &ctx),
+        Command::Eval(a) => eval::eval(a, &ctx),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,
@@ -524,51 +539,6 @@ pub fn read_image(
     Ok((img, icc))
 }
 
-/// Whether an ICC profile describes sRGB (an RGB profile whose description names it, as
-/// "sRGB IEC61966-2.1" or "sRGB built-in" do): storing it would only repeat what a file
-/// without a profile means. Reads the `desc` tag, ICC v2 (`desc`) or v4 (`mluc`, UTF-16).
-pub fn is_srgb(icc: &[u8]) -> bool {
-    let u32_at = |at: usize| -> Option<usize> {
-        let b = icc.get(at..at.checked_add(4)?)?;
-        Some(u32::from_be_bytes([b[0], b[1], b[2], b[3]]) as usize)
-    };
-    let desc = || -> Option<String> {
-        if icc.get(16..20)? != b"RGB " {
-            return None;
-        }
-        let tags = u32_at(128)?;
-        let (at, len) = (0..tags.min(1024)).find_map(|i| {
-            let e = 132 + 12 * i;
-            if icc.get(e..e + 4)? != b"desc" {
-                return None;
-            }
-            Some((u32_at(e + 4)?, u32_at(e + 8)?))
-        })?;
-        let tag = icc.get(at..at.checked_add(len)?)?;
-        match tag.get(..4)? {
-            b"desc" => {
-                let n = u32_at(at + 8)?;
-                Some(String::from_utf8_lossy(tag.get(12..12usize.checked_add(n)?)?).into())
-            }
-            b"mluc" => {
-                // The first record: its length and offset from the tag's start.
-                let (n, off) = (u32_at(at + 20)?, u32_at(at + 24)?);
-                let text = tag.get(off..off.checked_add(n)?)?;
-                let units = text
-                    .chunks_exact(2)
-                    .map(|c| u16::from_be_bytes([c[0], c[1]]));
-                Some(
-                    char::decode_utf16(units)
-                        .map(|c| c.unwrap_or('?'))
-                        .collect(),
-                )
-            }
-            _ => None,
-        }
-    };
-    desc().is_some_and(|d| d.contains("sRGB"))
-}
-
 /// The image format an output path's extension names; PNG for `-` (standard output, checked
 /// with [`check_output`]). An unknown extension is a usage error, checked before the work.
 pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageFormat> {
@@ -660,65 +630,4 @@ pub fn sampler_by_name(
         "farthest" => Box::new(FarthestPoint { seed }),
         _ => return None,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::is_srgb;
-
-    /// A minimal RGB profile whose only tag is `desc`, holding `tag`.
-    fn profile(tag: &[u8]) -> Vec<u8> {
-        let mut p = vec![0u8; 128];
-        p[16..20].copy_from_slice(b"RGB ");
-        p.extend_from_slice(&1u32.to_be_bytes());
-        p.extend_from_slice(b"desc");
-        p.extend_from_slice(&144u32.to_be_bytes());
-        p.extend_from_slice(&(tag.len() as u32).to_be_bytes());
-        p.extend_from_slice(tag);
-        p
-    }
-
-    /// A v2 `desc` tag.
-    fn v2(text: &str) -> Vec<u8> {
-        let mut t = b"desc\0\0\0\0".to_vec();
-        t.extend_from_slice(&(text.len() as u32 + 1).to_be_bytes());
-        t.extend_from_slice(text.as_bytes());
-        t.push(0);
-        profile(&t)
-    }
-
-    /// A v4 `mluc` tag with one record.
-    fn v4(text: &str) -> Vec<u8> {
-        let utf16: Vec<u8> = text.encode_utf16().flat_map(u16::to_be_bytes).collect();
-        let mut t = b"mluc\0\0\0\0".to_vec();
-        for n in [1u32, 12] {
-            t.extend_from_slice(&n.to_be_bytes());
-        }
-        t.extend_from_slice(b"enUS");
-        t.extend_from_slice(&(utf16.len() as u32).to_be_bytes());
-        t.extend_from_slice(&28u32.to_be_bytes());
-        t.extend_from_slice(&utf16);
-        profile(&t)
-    }
-
-    #[test]
-    fn srgb_profiles_are_recognised_by_their_description() {
-        assert!(is_srgb(&v2("sRGB IEC61966-2.1")));
-        assert!(is_srgb(&v4("sRGB built-in")));
-        assert!(!is_srgb(&v2("Display P3")));
-        assert!(!is_srgb(&v4("Adobe RGB (1998)")));
-        // A grey profile is not sRGB whatever it says.
-        let mut grey = v2("sRGB");
-        grey[16..20].copy_from_slice(b"GRAY");
-        assert!(!is_srgb(&grey));
-        // Cut or garbled profiles are not sRGB (and do not panic).
-        let whole = v4("sRGB built-in");
-        for n in 0..whole.len() {
-            assert!(!is_srgb(&whole[..n]), "cut at {n}");
-        }
-        let mut far = v2("sRGB");
-        far[136..140].copy_from_slice(&u32::MAX.to_be_bytes());
-        assert!(!is_srgb(&far));
-        assert!(!is_srgb(b"not a profile"));
-    }
 }
