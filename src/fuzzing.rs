@@ -274,7 +274,11 @@ pub fn push(data: &[u8]) {
                 Ok(p) => {
                     let header = dec.header().cloned().expect("render implies a header");
                     check_decoded(p.decoded(), &header, w, h);
-                    let used = dec.samples_available().min(k);
+                    // The refinement's picture draws on every sample (its prediction).
+                    let used = match p.decoded().refined {
+                        true => header.total_samples,
+                        false => dec.samples_available().min(k),
+                    };
                     assert_eq!(p.decoded().samples_used, used);
                     let all = used == header.total_samples;
                     assert_eq!(p.is_final(), all && dec.is_complete());

@@ -1220,7 +1220,7 @@ proptest! {
     }
 }
 
-/// Throughput figures for the report: `cargo test --release --test container -- --ignored --nocapture`.
+/// Throughput figures for the report: `cargo test --release --test suite container:: -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn throughput() {

@@ -505,10 +505,15 @@ fn giant_claims_use_bounded_memory() {
         eprintln!("no /proc/self/status: skipped");
         return;
     }
+    // Its name in this binary: `memory_child`, or `MODULE::memory_child` in tests/suite.rs.
+    let name = match module_path!().split_once("::") {
+        Some((_, module)) => format!("{module}::memory_child"),
+        None => "memory_child".to_string(),
+    };
     let out = std::process::Command::new(std::env::current_exe().expect("test binary"))
         .args([
             "--exact",
-            "memory_child",
+            &name,
             "--include-ignored",
             "--nocapture",
             "--test-threads=1",

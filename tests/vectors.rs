@@ -1,6 +1,6 @@
 //! The conformance set in `spec/vectors/`: small `.qcs` files and the pictures they decode to.
 //!
-//! Checked by default. `QCS_REGENERATE=1 cargo test --release --test vectors` rewrites every
+//! Checked by default. `QCS_REGENERATE=1 cargo test --release --test suite vectors::` rewrites every
 //! `.qcs`, the expected PNGs and `spec/vectors/README.md` from the definitions below (do it when
 //! the encoder or the reconstruction changes on purpose, then review the diff).
 //!
@@ -502,7 +502,7 @@ fn regenerate() {
          against them.\n\
          The PNGs follow the reference reconstruction, which may still change: regenerate every\n\
          file with one command,\n\n\
-         ```\nQCS_REGENERATE=1 cargo test --release --test vectors\n```\n\n\
+         ```\nQCS_REGENERATE=1 cargo test --release --test suite vectors::\n```\n\n\
          and review the diff. `cargo test` checks them otherwise (and that the encoder still\n\
          writes the same bytes). The sample colours are the encoder's choice:\n\
          `SampleColour::Progressive`, but the encoder's default (`SampleColour::Fitted`) in\n\

@@ -1,14 +1,16 @@
-//! `qcs render` (stylized renderings) and `qcs eval` (the paper's evaluation).
+//! `qcs render`: stylized renderings of a .qcs file, or of an image sampled by any strategy.
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
 use qcs::lattice::ZZeta;
 use qcs::reconstruction::SampleSet;
 use qcs::sampling::{SampleColour, SourceImage};
 use qcs::sites::{Frame, Point};
 use qcs::{styles, Method, StreamDecoder};
 use std::path::PathBuf;
+
+use super::input::{QcsInput, ReadQcs, Source};
+use super::{Ctx, Size};
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
 pub enum Style {
@@ -34,11 +36,12 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value = "mosaic")]
     pub style: Style,
     /// Number of samples (default: all of a .qcs file; 4225 for an image).
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_count)]
     pub samples: Option<usize>,
-    /// Output size WxH (default: the image's size; see the spectrum and phase styles).
+    /// Output size: WxH, or W, Wx or xH keeping the aspect ratio (default: the image's size;
+    /// see the spectrum and phase styles).
     #[arg(long, value_parser = super::parse_size)]
-    pub size: Option<(u32, u32)>,
+    pub size: Option<Size>,
     /// Sampler for an ordinary image: quasicrystal, periodic, jittered, halton, random, farthest.
     #[arg(long, default_value = "quasicrystal", value_parser = clap::builder::PossibleValuesParser::new(super::SAMPLERS))]
     pub sampler: String,
@@ -83,49 +86,80 @@ impl Samples {
     }
 }
 
-fn samples(a: &RenderArgs) -> Result<Samples> {
-    let bytes = super::read_input(&a.input)?;
-    if bytes.starts_with(&qcs::container::MAGIC) {
-        let mut d = StreamDecoder::new(qcs::Limits::default());
-        d.push(&bytes)
-            .with_context(|| format!("cannot decode {}", a.input.display()))?;
-        let h = d.header().cloned().ok_or(qcs::Error::NeedMoreData)?;
-        let c = h.layout.channels() as usize;
-        let k = a.samples.map_or(u64::MAX, |n| n as u64);
-        let frame = qcs::sites::Quasicrystal::with_frame(
-            h.width,
-            h.height,
-            h.lattice
-                .map_or(Frame::default_for(h.width, h.height), |l| Frame {
-                    root_len: l.root_length,
-                    origin: [l.origin_x, l.origin_y],
-                }),
-        )?
-        .frame();
-        let (pos, col) = d.samples(k);
-        let rgb = col
-            .chunks_exact(c)
-            .flat_map(|p| {
-                if c >= 3 {
-                    [p[0], p[1], p[2]]
-                } else {
-                    [p[0]; 3]
-                }
-            })
-            .collect();
-        return Ok(Samples {
-            pos: pos.iter().map(|s| s.pos).collect(),
-            col: rgb,
-            source: (h.width, h.height),
-            exact: Some((pos.iter().map(|s| s.lattice).collect(), frame)),
-        });
+/// The samples of a .qcs file, or `None` if it ends inside its header (nothing to draw).
+fn qcs_samples(a: &RenderArgs, input: QcsInput, ctx: &Ctx) -> Result<Option<Samples>> {
+    let Some(h) = input.header.clone() else {
+        return Ok(None);
+    };
+    let k = a.samples.map_or(u64::MAX, |n| n as u64);
+    let opts = qcs::container::ParserOptions::with_limits(ctx.limits.clone()).decode_before(k);
+    let mut d = StreamDecoder::with_options(opts);
+    d.push(&input.bytes)
+        .with_context(|| format!("cannot decode {}", a.input.display()))?;
+    let c = h.layout.channels() as usize;
+    let frame = qcs::sites::Quasicrystal::with_frame(
+        h.width,
+        h.height,
+        h.lattice
+            .map_or(Frame::default_for(h.width, h.height), |l| Frame {
+                root_len: l.root_length,
+                origin: [l.origin_x, l.origin_y],
+            }),
+    )?
+    .frame();
+    let (pos, col) = d.samples(k);
+    let rgb = col
+        .chunks_exact(c)
+        .flat_map(|p| {
+            if c >= 3 {
+                [p[0], p[1], p[2]]
+            } else {
+                [p[0]; 3]
+            }
+        })
+        .collect();
+    Ok(Some(Samples {
+        pos: pos.iter().map(|s| s.pos).collect(),
+        col: rgb,
+        source: (h.width, h.height),
+        exact: Some((pos.iter().map(|s| s.lattice).collect(), frame)),
+    }))
+}
+
+/// The samples to draw: a .qcs file's (by its content, or its name: an empty `x.qcs` is a
+/// file that ends inside its header), or an image's sampled with `--sampler`; `None` if a
+/// .qcs file has nothing to draw yet.
+fn samples(a: &RenderArgs, ctx: &Ctx) -> Result<Option<Samples>> {
+    let mut src = Source::open(&a.input)?;
+    let qcs_file = super::looks_like_qcs(src.peek(2)?) || super::has_qcs_extension(&a.input);
+    if qcs_file {
+        let what = || format!("cannot decode {}", a.input.display());
+        let how = ReadQcs {
+            budget: None,
+            recover: false,
+        };
+        let input = super::input::read_qcs(src, &how, ctx, |h| {
+            let size = a
+                .size
+                .map_or((h.width, h.height), |s| s.resolve(h.width, h.height));
+            ctx.limits
+                .check_output(size.0 as u64, size.1 as u64)
+                .map_err(qcs::Error::from)?;
+            Ok(())
+        })
+        .with_context(what)?
+        .ok()
+        .with_context(what)?;
+        return qcs_samples(a, input, ctx);
     }
+    super::input::check_image_start(&mut src)?;
+    let bytes = super::input::read_all(src, ctx)?;
     let img = image::load_from_memory(&bytes)
         .with_context(|| format!("cannot read image {}", a.input.display()))?
         .to_rgb8();
     let (w, h) = img.dimensions();
     let n = a.samples.unwrap_or(4225);
-    qcs::Limits::default()
+    ctx.limits
         .check_samples(n as u64)
         .map_err(qcs::Error::from)?;
     let Some(sampler) = super::sampler_by_name(&a.sampler, a.seed) else {
@@ -143,19 +177,19 @@ fn samples(a: &RenderArgs) -> Result<Samples> {
         (sampler.sites(w, h, n), None)
     };
     let col = SourceImage::new(img.as_raw(), w, h, 3)?.colours(&pos, SampleColour::Area, n);
-    Ok(Samples {
+    Ok(Some(Samples {
         pos,
         col,
         source: (w, h),
         exact,
-    })
+    }))
 }
 
-pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
+pub fn render(a: RenderArgs, ctx: &Ctx) -> Result<()> {
     // The output's format (and, for `-`, that it is no terminal) before any work.
     super::output_format(&a.output)?;
     if a.style == Style::Phase {
-        let size = a.size.unwrap_or((512, 512));
+        let size = a.size.map_or((512, 512), |s| s.resolve(512, 512));
         let window = styles::PhaseWindow::centred(1.5);
         let contour = styles::phase_contour(window, size)?;
         let level = styles::phase_level_set(window, size, 2.0)?;
@@ -165,10 +199,25 @@ pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
         super::save_image(&image::DynamicImage::ImageRgb8(both), &a.output)?;
         return Ok(());
     }
-    let samples = samples(&a)?;
+    let Some(samples) = samples(&a, ctx)? else {
+        // A .qcs file that ends inside its header: nothing to draw yet (not an error).
+        let size = a.size.map_or((1, 1), |s| s.resolve(1, 1));
+        let grey = image::GrayImage::from_pixel(size.0, size.1, image::Luma([128]));
+        super::save_image(&image::DynamicImage::ImageLuma8(grey), &a.output)?;
+        if !ctx.quiet {
+            eprintln!(
+                "{}: neutral grey {}×{}: {} ends inside its header, nothing to draw yet",
+                a.output.display(),
+                size.0,
+                size.1,
+                a.input.display()
+            );
+        }
+        return Ok(());
+    };
     let (pos, col, source) = (&samples.pos, &samples.col, samples.source);
-    let size = a.size.unwrap_or(source);
-    qcs::Limits::default()
+    let size = a.size.map_or(source, |s| s.resolve(source.0, source.1));
+    ctx.limits
         .check_output(size.0 as u64, size.1 as u64)
         .map_err(qcs::Error::from)?;
     let sites = samples.sites();
@@ -185,77 +234,13 @@ pub fn render(a: RenderArgs, quiet: bool) -> Result<()> {
         Style::Phase => unreachable!("handled above"),
     };
     super::save_image(&image::DynamicImage::ImageRgb8(img), &a.output)?;
-    if !quiet {
+    if !ctx.quiet {
         eprintln!(
             "{}: {:?} of {} samples",
             a.output.display(),
             a.style,
             pos.len()
         );
-    }
-    Ok(())
-}
-
-#[derive(Args, Debug)]
-pub struct EvalArgs {
-    /// Images to evaluate on.
-    #[arg(required = true)]
-    pub images: Vec<PathBuf>,
-    /// Output directory (CSV, plots, panels, index.html).
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Fewer curve points and smaller panels, for a quick look.
-    #[arg(long)]
-    pub quick: bool,
-    /// Seed of the random samplers.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-}
-
-pub fn eval(a: EvalArgs, quiet: bool) -> Result<()> {
-    let mut images = Vec::new();
-    for p in &a.images {
-        let img = super::open_image(p)?.to_rgb8();
-        let name = p
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("image")
-            .to_string();
-        images.push((name, img));
-    }
-    let mut samplers: Vec<Box<dyn qcs::sites::Sampler + Send + Sync>> =
-        vec![super::sampler_by_name("quasicrystal", a.seed).expect("quasicrystal")];
-    samplers.extend(qcs::sites::strategies::all(a.seed));
-    let mut opts = qcs::eval::EvalOptions::default();
-    if a.quick {
-        opts.curve_counts = qcs::eval::curve_counts(256, 8192, 12);
-        opts.panel_size = 256;
-    }
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(1)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} {msg}").expect("valid template"),
-    );
-    let report = qcs::eval::run(&images, &samplers, &a.out, &opts, &mut |p| {
-        bar.set_length(p.total as u64);
-        bar.set_position(p.done as u64);
-        bar.set_message(p.stage.to_string());
-    })
-    .with_context(|| format!("cannot write the evaluation into {}", a.out.display()))?;
-    bar.finish_and_clear();
-    if !quiet {
-        for c in &report.claims {
-            let v = match c.holds {
-                Some(true) => "holds",
-                Some(false) => "does not hold",
-                None => "not checked",
-            };
-            say!("{v:>14}: {} ({})", c.statement, c.evidence);
-        }
-        say!("report: {}", a.out.join("index.html").display());
     }
     Ok(())
 }

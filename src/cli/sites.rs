@@ -7,14 +7,14 @@ use std::io::Write;
 
 #[derive(Args, Debug)]
 pub struct SitesArgs {
-    /// Image width in pixels.
-    #[arg(long)]
+    /// Image width in pixels (1–65535).
+    #[arg(long, value_parser = super::parse_side)]
     pub width: u32,
-    /// Image height in pixels.
-    #[arg(long)]
+    /// Image height in pixels (1–65535).
+    #[arg(long, value_parser = super::parse_side)]
     pub height: u32,
     /// Number of sites.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse_count)]
     pub count: usize,
     /// Sampling strategy: quasicrystal, periodic, jittered, halton, random, farthest.
     #[arg(long, default_value = "quasicrystal", value_parser = clap::builder::PossibleValuesParser::new(super::SAMPLERS))]
@@ -24,8 +24,8 @@ pub struct SitesArgs {
     pub seed: u64,
 }
 
-pub fn run(a: SitesArgs) -> Result<()> {
-    qcs::Limits::default()
+pub fn run(a: SitesArgs, ctx: &super::Ctx) -> Result<()> {
+    ctx.limits
         .check_samples(a.count as u64)
         .map_err(qcs::Error::from)?;
     let out = std::io::stdout();

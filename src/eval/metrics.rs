@@ -5,15 +5,6 @@ use crate::{Error, Result};
 /// PSNR in dB between two RGB8 buffers of equal length (interleaved R, G, B):
 /// `10·log10(255² / MSE)` with the MSE over all bytes (all pixels, all three
 /// channels). Identical buffers give `f64::INFINITY`.
-///
-/// ```
-/// let a = [0u8, 0, 0, 10, 10, 10];
-/// let b = [0u8, 0, 0, 10, 10, 12];
-/// // MSE = 4/6, so PSNR = 10·log10(255²·6/4).
-/// let want = 10.0 * (255.0f64 * 255.0 * 1.5).log10();
-/// assert!((qcs::eval::psnr_bytes(&a, &b).unwrap() - want).abs() < 1e-12);
-/// assert_eq!(qcs::eval::psnr_bytes(&a, &a).unwrap(), f64::INFINITY);
-/// ```
 pub fn psnr_bytes(a: &[u8], b: &[u8]) -> Result<f64> {
     if a.len() != b.len() || a.is_empty() {
         return Err(Error::Parameter(format!(
@@ -38,13 +29,6 @@ pub fn psnr_bytes(a: &[u8], b: &[u8]) -> Result<f64> {
 }
 
 /// PSNR of two RGB images of the same size; see [`psnr_bytes`].
-///
-/// ```
-/// let a = image::RgbImage::from_pixel(4, 4, image::Rgb([100, 100, 100]));
-/// let b = image::RgbImage::from_pixel(4, 4, image::Rgb([101, 101, 101]));
-/// assert!((qcs::eval::psnr(&a, &b).unwrap() - 48.1308).abs() < 1e-3);
-/// assert!(qcs::eval::psnr(&a, &image::RgbImage::new(2, 2)).is_err());
-/// ```
 pub fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> Result<f64> {
     if a.dimensions() != b.dimensions() {
         return Err(Error::Parameter(format!(
@@ -61,14 +45,6 @@ pub fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> Result<f64> {
 /// a staircase or saw-tooth scores its tooth height.
 ///
 /// Needs at least 5 points with positive `x`; otherwise returns `None`.
-///
-/// ```
-/// let x: Vec<f64> = (1..=20).map(|k| (k * 100) as f64).collect();
-/// let smooth: Vec<f64> = x.iter().map(|v| 3.0 * v.log2()).collect();
-/// let saw: Vec<f64> = smooth.iter().enumerate().map(|(k, v)| v + if k % 2 == 0 { 0.5 } else { -0.5 }).collect();
-/// assert!(qcs::eval::roughness(&x, &smooth).unwrap() < 1e-9);
-/// assert!(qcs::eval::roughness(&x, &saw).unwrap() > 0.3);
-/// ```
 pub fn roughness(x: &[f64], y: &[f64]) -> Option<f64> {
     let pts: Vec<(f64, f64)> = x
         .iter()
@@ -135,4 +111,40 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
         b[2] / a[2][2],
         b[3] / a[3][3],
     ])
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn psnr_bytes_of_known_errors() {
+        let a = [0u8, 0, 0, 10, 10, 10];
+        let b = [0u8, 0, 0, 10, 10, 12];
+        // MSE = 4/6, so PSNR = 10·log10(255²·6/4).
+        let want = 10.0 * (255.0f64 * 255.0 * 1.5).log10();
+        assert!((crate::eval::psnr_bytes(&a, &b).unwrap() - want).abs() < 1e-12);
+        assert_eq!(crate::eval::psnr_bytes(&a, &a).unwrap(), f64::INFINITY);
+    }
+
+    #[test]
+    fn psnr_of_images() {
+        let a = image::RgbImage::from_pixel(4, 4, image::Rgb([100, 100, 100]));
+        let b = image::RgbImage::from_pixel(4, 4, image::Rgb([101, 101, 101]));
+        assert!((crate::eval::psnr(&a, &b).unwrap() - 48.1308).abs() < 1e-3);
+        assert!(crate::eval::psnr(&a, &image::RgbImage::new(2, 2)).is_err());
+    }
+
+    #[test]
+    fn roughness_of_smooth_and_sawtooth_curves() {
+        let x: Vec<f64> = (1..=20).map(|k| (k * 100) as f64).collect();
+        let smooth: Vec<f64> = x.iter().map(|v| 3.0 * v.log2()).collect();
+        let saw: Vec<f64> = smooth
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v + if k % 2 == 0 { 0.5 } else { -0.5 })
+            .collect();
+        assert!(crate::eval::roughness(&x, &smooth).unwrap() < 1e-9);
+        assert!(crate::eval::roughness(&x, &saw).unwrap() > 0.3);
+    }
 }

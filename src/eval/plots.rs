@@ -1,4 +1,5 @@
-//! PSNR-vs-samples plots with `plotters` (SVG with text, PNG without: no font is bundled).
+//! PSNR-vs-samples plots with `plotters`, as SVG and PNG, their text in a bundled font
+//! (`assets/fonts/`: a subset of DejaVu Sans, printable ASCII and a few signs).
 
 use std::path::Path;
 
@@ -22,6 +23,21 @@ pub(crate) const PALETTE: [RGBColor; 8] = [
 pub(crate) fn colour_hex(k: usize) -> String {
     let RGBColor(r, g, b) = PALETTE[k % PALETTE.len()];
     format!("#{r:02x}{g:02x}{b:02x}")
+}
+
+/// The font the plots' text is drawn in (plotters' bitmap backend has no font of its own).
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-subset.ttf");
+
+/// Registers [`FONT`] as plotters' "sans-serif", once.
+fn register_font() -> Result<()> {
+    static ONCE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *ONCE.get_or_init(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok()
+    });
+    match ok {
+        true => Ok(()),
+        false => Err(err("the bundled font cannot be read")),
+    }
 }
 
 fn err<E: std::fmt::Display>(e: E) -> Error {
@@ -55,7 +71,7 @@ fn bounds(series: &[(String, Vec<(usize, f64)>)]) -> Option<(f64, f64, f64, f64)
 
 fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
-    title: Option<&str>,
+    title: &str,
     series: &[(String, Vec<(usize, f64)>)],
 ) -> Result<()>
 where
@@ -65,36 +81,22 @@ where
     let Some((x0, x1, y0, y1)) = bounds(series) else {
         return root.present().map_err(err);
     };
-    let labels = title.is_some();
-    let mut builder = ChartBuilder::on(&root);
-    builder.margin(15);
-    if let Some(t) = title {
-        builder
-            .caption(t, ("sans-serif", 20))
-            .x_label_area_size(40)
-            .y_label_area_size(55);
-    }
-    let mut chart = builder
+    let mut chart = ChartBuilder::on(&root)
+        .margin(15)
+        .caption(title, ("sans-serif", 20))
+        .x_label_area_size(40)
+        .y_label_area_size(55)
         .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
         .map_err(err)?;
-    if labels {
-        chart
-            .configure_mesh()
-            .x_desc("samples")
-            .y_desc("PSNR (dB)")
-            .x_label_formatter(&|v| format!("{v:.0}"))
-            .draw()
-            .map_err(err)?;
-    } else {
-        chart
-            .configure_mesh()
-            .x_labels(0)
-            .y_labels(0)
-            .draw()
-            .map_err(err)?;
-    }
-    // Guides drawn as data, so the label-less PNG has them too: every whole dB
-    // (every 5 dB on tall ranges) and the square counts (2^k+1)².
+    chart
+        .configure_mesh()
+        .x_desc("samples")
+        .y_desc("PSNR (dB)")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .draw()
+        .map_err(err)?;
+    // Guides drawn as data: every whole dB (every 5 dB on tall ranges) and the square
+    // counts (2^k+1)².
     let grey = RGBColor(215, 215, 215);
     let step = if y1 - y0 > 20.0 { 5.0 } else { 1.0 };
     let mut y = (y0 / step).ceil() * step;
@@ -121,47 +123,42 @@ where
         let s = chart
             .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
             .map_err(err)?;
-        if labels {
-            s.label(name.as_str()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-            });
-        }
+        s.label(name.as_str()).legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+        });
         chart
             .draw_series(pts.iter().map(|&p| Circle::new(p, 2, colour.filled())))
             .map_err(err)?;
     }
-    if labels {
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(err)?;
-    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerRight)
+        .draw()
+        .map_err(err)?;
     root.present().map_err(err)
 }
 
-/// Writes the curves as an SVG with title, axes labels and legend, and as a PNG
-/// with the same lines and colours but no text (the bitmap backend has no font
-/// without the `ttf`/`ab_glyph` features; `index.html` shows the SVG). Both
-/// show grey lines at whole dB and blue lines at the square counts.
+/// Writes the curves as an SVG and as a PNG, each with title, axes labels, ticks and
+/// legend, grey lines at whole dB and blue lines at the square counts.
 pub(crate) fn curves(
     svg: &Path,
     png: &Path,
     title: &str,
     series: &[(String, Vec<(usize, f64)>)],
 ) -> Result<()> {
+    register_font()?;
     draw(
         SVGBackend::new(svg, (900, 560)).into_drawing_area(),
-        Some(title),
+        title,
         series,
     )?;
     // Draw into a buffer and save with `image` 0.25 (plotters' own encoder would pull image 0.24).
     let mut buf = vec![255u8; 900 * 560 * 3];
     draw(
         BitMapBackend::with_buffer(&mut buf, (900, 560)).into_drawing_area(),
-        None,
+        title,
         series,
     )?;
     image::RgbImage::from_raw(900, 560, buf)

@@ -19,11 +19,6 @@ pub const SIN72: f64 = 0.951_056_516_295_153_5;
 pub struct ZZeta(pub [i64; 4]);
 
 /// The lattice vector `self − o` (coordinate-wise).
-///
-/// ```
-/// use qcs::lattice::ZZeta;
-/// assert_eq!(ZZeta::new([3, 1, 0, -2]) - ZZeta::new([1, 1, 2, -2]), ZZeta::new([2, 0, -2, 0]));
-/// ```
 impl std::ops::Sub for ZZeta {
     type Output = ZZeta;
     #[inline]
@@ -96,11 +91,6 @@ impl ZZeta {
 }
 
 /// Exact sign of `u + sin72°·v` for `u, v ∈ Z[τ]` (uses `sin²72° = (2 + τ)/4`).
-///
-/// ```
-/// use qcs::lattice::{sign_plus_sin72, ZTau};
-/// assert_eq!(sign_plus_sin72(ZTau::int(-1), ZTau::int(2)), 1);
-/// ```
 pub fn sign_plus_sin72(u: ZTau, v: ZTau) -> i32 {
     let (su, sv) = (u.signum(), v.signum());
     if su == sv || sv == 0 {
@@ -208,5 +198,25 @@ mod tests {
         assert_eq!(sign_plus_sin72(ZTau::int(-95105), ZTau::int(100000)), 1);
         assert_eq!(sign_plus_sin72(ZTau::int(-95106), ZTau::int(100000)), -1);
         assert_eq!(sign_plus_sin72(ZTau::ZERO, ZTau::ZERO), 0);
+    }
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn subtraction_is_coordinatewise() {
+        use crate::lattice::ZZeta;
+        assert_eq!(
+            ZZeta::new([3, 1, 0, -2]) - ZZeta::new([1, 1, 2, -2]),
+            ZZeta::new([2, 0, -2, 0])
+        );
+    }
+
+    #[test]
+    fn sign_plus_sin72_of_a_positive_sum() {
+        use crate::lattice::{sign_plus_sin72, ZTau};
+        assert_eq!(sign_plus_sin72(ZTau::int(-1), ZTau::int(2)), 1);
     }
 }

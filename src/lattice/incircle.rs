@@ -20,12 +20,6 @@ use super::golden::ZTau;
 
 /// Coordinates `n_k` of points given to [`orient`] and [`incircle`] must satisfy
 /// `|n_k| < EXACT_LIMIT` (2^20).
-///
-/// ```
-/// use qcs::lattice::{within_exact_limit, ZZeta, EXACT_LIMIT};
-/// assert!(within_exact_limit(ZZeta::new([EXACT_LIMIT - 1, 0, 0, 0])));
-/// assert!(!within_exact_limit(ZZeta::new([0, 0, -EXACT_LIMIT, 0])));
-/// ```
 pub const EXACT_LIMIT: i64 = 1 << 20;
 
 /// Whether every coordinate of `x` is below [`EXACT_LIMIT`] in absolute value.
@@ -36,15 +30,6 @@ pub fn within_exact_limit(x: ZZeta) -> bool {
 /// `D ∈ Z[τ]` with `orient2d(a, b, c) = (sin72°/2)·D`, where
 /// `orient2d = (b − a) × (c − a)` (positive for a counter-clockwise turn in the
 /// (Re, Im) plane).
-///
-/// ```
-/// use qcs::lattice::{orient_value, ZTau, ZZeta};
-/// let o = ZZeta::new([0, 0, 0, 0]);
-/// let one = ZZeta::new([1, 0, 0, 0]);
-/// let zeta = ZZeta::new([0, 1, 0, 0]);
-/// // 1 × ζ = sin 72° = (sin72°/2)·2
-/// assert_eq!(orient_value(o, one, zeta), ZTau::int(2));
-/// ```
 pub fn orient_value(a: ZZeta, b: ZZeta, c: ZZeta) -> ZTau {
     let (p, q) = (b - a, c - a);
     let (up, vp) = (p.re2(), p.im_s());
@@ -205,5 +190,27 @@ mod tests {
             let ev = incircle_value(p[0], p[1], p[2], p[3]).to_f64() * k;
             assert!((det - ev).abs() < 1e-7 * (1.0 + det.abs()), "{det} {ev}");
         }
+    }
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn exact_limit_bounds_coordinates() {
+        use crate::lattice::{within_exact_limit, ZZeta, EXACT_LIMIT};
+        assert!(within_exact_limit(ZZeta::new([EXACT_LIMIT - 1, 0, 0, 0])));
+        assert!(!within_exact_limit(ZZeta::new([0, 0, -EXACT_LIMIT, 0])));
+    }
+
+    #[test]
+    fn orient_value_of_one_and_zeta() {
+        use crate::lattice::{orient_value, ZTau, ZZeta};
+        let o = ZZeta::new([0, 0, 0, 0]);
+        let one = ZZeta::new([1, 0, 0, 0]);
+        let zeta = ZZeta::new([0, 1, 0, 0]);
+        // 1 × ζ = sin 72° = (sin72°/2)·2
+        assert_eq!(orient_value(o, one, zeta), ZTau::int(2));
     }
 }

@@ -23,11 +23,6 @@ pub struct PhaseWindow {
 
 impl PhaseWindow {
     /// The square `[−r, r]²` centred on the origin.
-    ///
-    /// ```
-    /// let w = qcs::styles::PhaseWindow::centred(2.0);
-    /// assert_eq!((w.x0, w.x1), (-2.0, 2.0));
-    /// ```
     pub fn centred(r: f64) -> Self {
         PhaseWindow {
             x0: -r,
@@ -71,10 +66,6 @@ impl PhaseWindow {
 /// The terms `j` and `j+5` are complex conjugates (`ζ^{j+5} = −ζʲ`), so `f` is
 /// real: this returns `Σ cos(2π·2τ⁴ (x cos(πj/5) + y sin(πj/5)))`. Its maximum is
 /// `f(0) = 10`; it is invariant under rotation by `ζ` and under `z ↦ −z`.
-///
-/// ```
-/// assert!((qcs::styles::phase_value([0.0, 0.0]) - 10.0).abs() < 1e-12);
-/// ```
 pub fn phase_value(z: [f64; 2]) -> f64 {
     let k = 2.0 * TAU.powi(4);
     (0..10)
@@ -97,12 +88,6 @@ fn check_size(size: (u32, u32)) -> Result<()> {
 /// white (0) – red (+10) colour ramp with dark contour lines at the levels
 /// −6, −2, 2, 6. `f` oscillates with wavelength down to `1/(2τ⁴) ≈ 0.073` lattice
 /// units, so give at least ~100 pixels per unit (windows of a few units).
-///
-/// ```
-/// use qcs::styles::{phase_contour, PhaseWindow};
-/// let img = phase_contour(PhaseWindow::centred(1.0), (64, 64)).unwrap();
-/// assert_eq!(img.dimensions(), (64, 64));
-/// ```
 pub fn phase_contour(window: PhaseWindow, size: (u32, u32)) -> Result<RgbImage> {
     window.check()?;
     check_size(size)?;
@@ -149,14 +134,6 @@ fn roots() -> [[f64; 2]; 10] {
 /// unit step leaves the origin.
 /// Points are keyed by their exact integer coordinates in the basis `1, ζ, ζ², ζ³`
 /// of `Z[ζ]`, so no point is found twice.
-///
-/// ```
-/// use qcs::styles::{phase_sites, PhaseWindow};
-/// let s = phase_sites(PhaseWindow::centred(3.0), 2.0, 10_000).unwrap();
-/// assert_eq!(s[0], [0.0, 0.0]);
-/// assert!(s.len() > 10);
-/// assert!(s.iter().all(|&z| qcs::styles::phase_value(z) >= 2.0));
-/// ```
 pub fn phase_sites(window: PhaseWindow, threshold: f64, max_sites: usize) -> Result<Vec<[f64; 2]>> {
     window.check()?;
     if !threshold.is_finite() {
@@ -221,12 +198,6 @@ pub fn phase_sites(window: PhaseWindow, threshold: f64, max_sites: usize) -> Res
 
 /// The level set `f(z) ≥ threshold` (grey) over `window`, with the points of
 /// [`phase_sites`] drawn as dark red dots: the sites lie inside the level set.
-///
-/// ```
-/// use qcs::styles::{phase_level_set, PhaseWindow};
-/// let img = phase_level_set(PhaseWindow::centred(2.0), (80, 80), 2.0).unwrap();
-/// assert_eq!(img.get_pixel(40, 40).0, [160, 0, 0]); // the origin is a site
-/// ```
 pub fn phase_level_set(window: PhaseWindow, size: (u32, u32), threshold: f64) -> Result<RgbImage> {
     window.check()?;
     check_size(size)?;
@@ -256,4 +227,43 @@ pub fn phase_level_set(window: PhaseWindow, size: (u32, u32), threshold: f64) ->
         }
     }
     Ok(img)
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn centred_window() {
+        let w = crate::styles::PhaseWindow::centred(2.0);
+        assert_eq!((w.x0, w.x1), (-2.0, 2.0));
+    }
+
+    #[test]
+    fn phase_value_at_the_origin() {
+        assert!((crate::styles::phase_value([0.0, 0.0]) - 10.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn phase_contour_has_the_asked_size() {
+        use crate::styles::{phase_contour, PhaseWindow};
+        let img = phase_contour(PhaseWindow::centred(1.0), (64, 64)).unwrap();
+        assert_eq!(img.dimensions(), (64, 64));
+    }
+
+    #[test]
+    fn phase_sites_start_at_the_origin_above_the_level() {
+        use crate::styles::{phase_sites, PhaseWindow};
+        let s = phase_sites(PhaseWindow::centred(3.0), 2.0, 10_000).unwrap();
+        assert_eq!(s[0], [0.0, 0.0]);
+        assert!(s.len() > 10);
+        assert!(s.iter().all(|&z| crate::styles::phase_value(z) >= 2.0));
+    }
+
+    #[test]
+    fn phase_level_set_marks_the_origin() {
+        use crate::styles::{phase_level_set, PhaseWindow};
+        let img = phase_level_set(PhaseWindow::centred(2.0), (80, 80), 2.0).unwrap();
+        assert_eq!(img.get_pixel(40, 40).0, [160, 0, 0]); // the origin is a site
+    }
 }

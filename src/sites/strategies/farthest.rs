@@ -33,15 +33,6 @@ use crate::sites::{Point, Sampler};
 /// The first site is uniform in the domain, drawn from `seed`. If the domain is
 /// exhausted (every point within 1e−9 px of a site, which needs far more sites
 /// than pixels), the remaining sites are drawn uniformly at random.
-///
-/// ```
-/// use qcs::sites::{Sampler, strategies::FarthestPoint};
-/// let s = FarthestPoint { seed: 1 }.sites(64, 64, 200);
-/// let min = (0..s.len()).flat_map(|i| (0..i).map(move |j| (i, j)))
-///     .map(|(i, j)| ((s[i][0] - s[j][0]).powi(2) + (s[i][1] - s[j][1]).powi(2)).sqrt())
-///     .fold(f64::INFINITY, f64::min);
-/// assert!(min > 0.7 * (64.0 * 64.0 / 200.0f64).sqrt());
-/// ```
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FarthestPoint {
     /// Seed of the first site.
@@ -256,5 +247,21 @@ impl Sampler for FarthestPoint {
     }
     fn name(&self) -> &'static str {
         "farthest"
+    }
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn farthest_points_keep_their_distance() {
+        use crate::sites::{strategies::FarthestPoint, Sampler};
+        let s = FarthestPoint { seed: 1 }.sites(64, 64, 200);
+        let min = (0..s.len())
+            .flat_map(|i| (0..i).map(move |j| (i, j)))
+            .map(|(i, j)| ((s[i][0] - s[j][0]).powi(2) + (s[i][1] - s[j][1]).powi(2)).sqrt())
+            .fold(f64::INFINITY, f64::min);
+        assert!(min > 0.7 * (64.0 * 64.0 / 200.0f64).sqrt());
     }
 }

@@ -3,12 +3,6 @@
 use crate::sites::{Point, Sampler};
 
 /// The Halton sequence, bases 2 (x) and 3 (y), indices `1…N`, scaled to `W × H`.
-///
-/// ```
-/// use qcs::sites::{Sampler, strategies::Halton};
-/// let s = Halton.sites(100, 90, 3);
-/// assert_eq!(s, vec![[50.0, 30.0], [25.0, 60.0], [75.0, 10.0]]);
-/// ```
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Halton;
 
@@ -41,5 +35,17 @@ impl Sampler for Halton {
     }
     fn name(&self) -> &'static str {
         "halton"
+    }
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn halton_sites_are_the_base_2_and_3_radical_inverses() {
+        use crate::sites::{strategies::Halton, Sampler};
+        let s = Halton.sites(100, 90, 3);
+        assert_eq!(s, vec![[50.0, 30.0], [25.0, 60.0], [75.0, 10.0]]);
     }
 }

@@ -11,13 +11,6 @@ use crate::sites::{Point, Sampler};
 /// is drawn uniformly in what remains (so the corner sites of level 0 move within
 /// the quarter of their cell that lies inside the image). The displacement of
 /// site `n` depends only on `seed` and `n`, so the prefix property holds.
-///
-/// ```
-/// use qcs::sites::{Sampler, strategies::Jittered};
-/// let a = Jittered { seed: 3 }.sites(64, 48, 300);
-/// assert_eq!(a, Jittered { seed: 3 }.sites(64, 48, 300));
-/// assert_ne!(a, Jittered { seed: 4 }.sites(64, 48, 300));
-/// ```
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Jittered {
     /// Seed of the displacements.
@@ -51,5 +44,18 @@ impl Sampler for Jittered {
     }
     fn name(&self) -> &'static str {
         "jittered"
+    }
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn jittered_sites_follow_the_seed() {
+        use crate::sites::{strategies::Jittered, Sampler};
+        let a = Jittered { seed: 3 }.sites(64, 48, 300);
+        assert_eq!(a, Jittered { seed: 3 }.sites(64, 48, 300));
+        assert_ne!(a, Jittered { seed: 4 }.sites(64, 48, 300));
     }
 }

@@ -36,11 +36,6 @@ use super::Sampler;
 /// periodic, farthest point, jittered, quasirandom (Halton), random.
 ///
 /// The stochastic ones (farthest point's first site, jittered, random) use `seed`.
-///
-/// ```
-/// let names: Vec<_> = qcs::sites::strategies::all(0).iter().map(|s| s.name()).collect();
-/// assert_eq!(names, ["periodic", "farthest", "jittered", "halton", "random"]);
-/// ```
 pub fn all(seed: u64) -> Vec<Box<dyn Sampler + Send + Sync>> {
     vec![
         Box::new(Periodic),
@@ -56,14 +51,6 @@ pub fn all(seed: u64) -> Vec<Box<dyn Sampler + Send + Sync>> {
 /// Used instead of a crate so that seeded sequences never change with a dependency
 /// upgrade. [`SplitMix64::at`] gives random access (`seed`, index) → value, which is
 /// how the samplers keep the prefix property trivially.
-///
-/// ```
-/// use qcs::sites::strategies::SplitMix64;
-/// let mut a = SplitMix64::new(1);
-/// let first = a.next_u64();
-/// assert_eq!(first, SplitMix64::at(1, 0));
-/// assert!((0.0..1.0).contains(&a.next_f64()));
-/// ```
 #[derive(Clone, Debug)]
 pub struct SplitMix64 {
     state: u64,
@@ -113,4 +100,30 @@ pub(crate) fn unit_pair(seed: u64, stream: u64, index: u64) -> (f64, f64) {
 pub(crate) fn clamp_open(v: f64, limit: f64) -> f64 {
     let top = limit - limit * f64::EPSILON * 4.0;
     v.max(0.0).min(top)
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn all_lists_the_five_strategies() {
+        let names: Vec<_> = crate::sites::strategies::all(0)
+            .iter()
+            .map(|s| s.name())
+            .collect();
+        assert_eq!(
+            names,
+            ["periodic", "farthest", "jittered", "halton", "random"]
+        );
+    }
+
+    #[test]
+    fn splitmix_streams_are_addressable() {
+        use crate::sites::strategies::SplitMix64;
+        let mut a = SplitMix64::new(1);
+        let first = a.next_u64();
+        assert_eq!(first, SplitMix64::at(1, 0));
+        assert!((0.0..1.0).contains(&a.next_f64()));
+    }
 }

@@ -13,13 +13,6 @@ use crate::sites::{Point, Sampler};
 /// grids, and any other count is a full grid plus the first rows of the next level
 /// (the top of the image is refined first — the paper's "refined in scan-line order").
 /// On a 1-pixel-wide or -high image the lattice collapses and sites repeat.
-///
-/// ```
-/// use qcs::sites::{Sampler, strategies::Periodic};
-/// let s = Periodic.sites(33, 33, 1089);
-/// assert_eq!(s[0], [0.5, 0.5]);
-/// assert!(s.iter().all(|p| p[0].fract() == 0.5 && p[1].fract() == 0.5));
-/// ```
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Periodic;
 
@@ -77,5 +70,18 @@ impl Sampler for Periodic {
     }
     fn name(&self) -> &'static str {
         "periodic"
+    }
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn periodic_sites_are_pixel_centres_on_a_square_grid() {
+        use crate::sites::{strategies::Periodic, Sampler};
+        let s = Periodic.sites(33, 33, 1089);
+        assert_eq!(s[0], [0.5, 0.5]);
+        assert!(s.iter().all(|p| p[0].fract() == 0.5 && p[1].fract() == 0.5));
     }
 }

@@ -4,12 +4,6 @@ use super::{clamp_open, unit_pair};
 use crate::sites::{Point, Sampler};
 
 /// Independent uniform sites in `[0, W) × [0, H)`, seeded ([`super::SplitMix64`]).
-///
-/// ```
-/// use qcs::sites::{Sampler, strategies::Random};
-/// let long = Random { seed: 9 }.sites(10, 10, 50);
-/// assert_eq!(&long[..20], &Random { seed: 9 }.sites(10, 10, 20)[..]);
-/// ```
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Random {
     /// Seed of the sequence.
@@ -31,5 +25,17 @@ impl Sampler for Random {
     }
     fn name(&self) -> &'static str {
         "random"
+    }
+}
+
+/// Value checks of this file's items, as unit tests rather than doc tests (each doc test is
+/// a binary of its own to build, and these teach nothing the prose does not say).
+#[cfg(test)]
+mod doc_examples {
+    #[test]
+    fn random_sites_are_progressive() {
+        use crate::sites::{strategies::Random, Sampler};
+        let long = Random { seed: 9 }.sites(10, 10, 50);
+        assert_eq!(&long[..20], &Random { seed: 9 }.sites(10, 10, 20)[..]);
     }
 }
