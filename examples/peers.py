@@ -28,15 +28,20 @@ Tables printed (Markdown on standard output):
    the largest file at most the target. WebP: `cwebp -m 6 -q`, q bisected likewise (cwebp's
    own `-size` overshoots). JPEG: `cjpeg -optimize -progressive -quality q` for q = 5..100,
    PSNR and SSIM interpolated at the target rate on the (log rate, quality) curve. "(k/n)":
-   only k of the n photographs reach that rate within the codec's range. Then BD-PSNR of qcs
+   only k of the n photographs reach that rate within the codec's range. Then how full each
+   file is (file / target bytes; WebP cannot exceed its q = 100 size), BD-PSNR of qcs
    against each peer (Bjøntegaard: PSNR fitted as a cubic in log rate for each codec over
    its points in 0.2–2.5 bpp, at the files' actual rates; the difference of the fits
    integrated over the common range, divided by its length; > 0: qcs is better), per photo
-   and mean, and the rates at which qcs's mean PSNR is below each peer's.
+   and mean, and where qcs's PSNR is below a peer's: rates where the mean is, and every
+   single photograph and rate where it is (with qcs's file / target, since a file that
+   leaves bytes unused loses at equal target bytes what BD-PSNR, at actual rates, keeps).
 2. Previews: mean PSNR of the full-size picture decoded from the first B bytes of one file.
    qcs at default quality (`qcs decode --bytes B`). JPEG 2000 with 18 quality layers
    (`opj_compress -I -r` at the ratios 16·2^(k/2), k = 17..0, i.e. 5793 … 16: half-octave
-   layers from about 130 bytes to 1.5 bpp) cut back to the last complete packet before B
+   layers from about 130 bytes to 1.5 bpp; peers-dev.md does not give its ladder: this one
+   comes within 0.11 dB of its j2k-layers row from 1 to 8 KiB and is above it at 256 and
+   512 B and at the full file) cut back to the last complete packet before B
    ("j2k-layers": the packet lengths are read from the PLT markers of a second encoding with
    `-PLT`, whose packets are byte for byte the same) or cut at B ("j2k-layers-rawcut"), both
    decoded by `opj_decompress -allow-partial` (no EOC marker appended: OpenJPEG reads an
@@ -433,12 +438,17 @@ def section_whole(run, photos, rates):
         print(head)
         for c in codecs:
             print('| %s | %s |' % (names[c], ' | '.join(cell(c, r, key, fmt) for r in rates)))
-    fill = [pts[p.name]['qcs', r]['bytes'] / pts[p.name]['qcs', r]['target_bytes']
-            for p in photos for r in rates]
-    over = sum(1 for x in fill if x > 1)
-    print('\nqcs `--target-size`: file / target %.3f mean, %.3f min, %.3f max; %d of %d files '
-          'over the target.' % (np.mean(fill), min(fill), max(fill), over, len(fill)))
-
+    print('\nFile / target bytes (mean, min); files under 98 % of the target:\n')
+    for c in codecs[:3]:
+        got = [(p.name, r, pts[p.name][c, r]) for p in photos for r in rates
+               if (c, r) in pts[p.name]]
+        fill = [(x, r, v['bytes'] / v['target_bytes']) for x, r, v in got]
+        over = [f for f in fill if f[2] > 1]
+        short = ['%s@%g %.0f%%' % (x, r, 100 * f) for x, r, f in fill if f < 0.98]
+        print('- %s: %.3f, %.3f;%s %s' % (
+            c, np.mean([f[2] for f in fill]), min(f[2] for f in fill),
+            ' **%d over the target**;' % len(over) if over else '',
+            ', '.join(short) if short else 'none'))
     print('\n### 1. BD-PSNR of qcs against each peer (dB, > 0: qcs better), 0.2–2.5 bpp\n')
     print('| photo | ' + ' | '.join('vs %s' % c for c in peers) + ' |\n|---|' + '---|' * len(peers))
     bd = {c: [] for c in peers}
@@ -455,19 +465,22 @@ def section_whole(run, photos, rates):
     print('| **mean** | %s |' % ' | '.join(
         '–' if mean(bd[c]) is None else '**%+.2f**' % mean(bd[c]) for c in peers))
 
-    print('\nRates at which qcs is below a peer (mean PSNR over the photographs both reach):\n')
+    print('\nWhere qcs is below a peer at equal target bytes (photo@bpp, dB, qcs file / '
+          'target):\n')
     for c in peers:
-        below = []
+        below_mean, below = [], []
         for r in rates:
             both = [p.name for p in photos if (c, r) in pts[p.name]]
-            if not both:
-                continue
-            d = [pts[x]['qcs', r]['psnr'] - pts[x][c, r]['psnr'] for x in both]
-            losers = [x for x, v in zip(both, d) if v < 0]
-            if np.mean(d) < 0:
-                below.append('%g bpp (mean %+.2f dB; below on %d/%d: %s)'
-                             % (r, np.mean(d), len(losers), len(both), ', '.join(losers)))
-        print('- vs %s: %s' % (c, '; '.join(below) if below else 'none'))
+            d = {x: pts[x]['qcs', r]['psnr'] - pts[x][c, r]['psnr'] for x in both}
+            if d and np.mean(list(d.values())) < 0:
+                below_mean.append('%g bpp (%+.2f)' % (r, np.mean(list(d.values()))))
+            below += ['%s@%g %+.2f (%.0f%%)' % (x, r, v, 100 * pts[x]['qcs', r]['bytes']
+                                                / pts[x]['qcs', r]['target_bytes'])
+                      for x, v in d.items() if v < 0]
+        print('- vs %s: mean below at %s; single photographs below at %d of %d points%s' % (
+            c, ', '.join(below_mean) or 'no rate',
+            len(below), sum(1 for x in photos for r in rates if (c, r) in pts[x.name]),
+            ': ' + ', '.join(below) if below else ''))
 
 
 # ---------------------------------------------------------------- 2. previews
