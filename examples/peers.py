@@ -54,7 +54,9 @@ Tables printed (Markdown on standard output):
    channels, same values), against `optipng -o2` of the same picture as PNG; the photographs,
    then a 301×199 crop of the first one as grey (L), grey+alpha (LA), RGB and RGBA, the alpha
    a diagonal gradient 0..255.
-4. Speed and memory, one thread (`RAYON_NUM_THREADS=1` for qcs, `-threads 1` for OpenJPEG;
+4. Speed and memory, one thread (`RAYON_NUM_THREADS=1` for qcs; OpenJPEG 2.5 as it runs by
+   default, without `-threads` and with OPJ_NUM_THREADS unset: one thread, no thread pool,
+   where `-threads 1` adds a worker thread and doubles opj_decompress's CPU time;
    libjpeg-turbo's tools do not thread), median over 3 runs of `/usr/bin/time` (CPU = user +
    sys seconds, peak = max RSS), on a 12-megapixel picture (4000×3000: a 4×4 grid of
    1000×750 cells, each a dev photograph scaled by Lanczos to cover the cell and centre-
@@ -62,7 +64,7 @@ Tables printed (Markdown on standard output):
    closest to 0.3 Mpx. Encode from PPM: qcs at default quality, `opj_compress -I -r` at the
    ratio that gives qcs's file size, `cjpeg -quality 85`. Decode to PPM: `qcs decode`,
    `opj_decompress`, `djpeg`. Thumbnail of 1/8 the size: `qcs decode --size W/8xH/8`,
-   `opj_decompress -r 3`, `djpeg -scale 1/8`.
+   `opj_decompress -r 3`, `djpeg -scale 1/8` (qcs writes a `.ppm` as PAM, P7).
 
 `--quick`: rates 0.25 / 0.5 / 1 / 2 bpp, budgets 64 / 512 / 2048 / 8192 B, JPEG q in steps of
 5, one timing run and a 3-megapixel (2000×1500) picture instead of 12.
@@ -83,6 +85,7 @@ from skimage.metrics import structural_similarity
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 QCS = os.environ.get('QCS', os.path.join(REPO, 'target', 'release', 'qcs'))
+os.environ.pop('OPJ_NUM_THREADS', None)  # OpenJPEG's thread pool: none, one thread
 
 RATES = [0.2, 0.25, 0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.5]
 BUDGETS = [32, 64, 128, 256, 512, 1024, 2048, 4096, 8192]
@@ -94,6 +97,7 @@ PEERS_DEV_BEST = {32: 15.34, 64: 15.34, 128: 15.34, 256: 15.34, 512: 19.13, 1024
                   2048: 23.82, 4096: 25.77, 8192: 28.13}
 PEERS_DEV_FLOOR = 10.36
 GREY = 128
+PEER_NAMES = {'j2k': 'JPEG 2000', 'jpeg': 'JPEG'}
 CSV_FIELDS = ['section', 'image', 'width', 'height', 'codec', 'setting', 'target_bytes',
               'bytes', 'bpp', 'psnr', 'ssim', 'exact', 'wall_s', 'user_s', 'sys_s',
               'maxrss_kb', 'note']
@@ -209,7 +213,7 @@ def qcs_decode(qf, out, *opts, check=True):
 
 
 def j2k_encode(ppm, out, ratios, *opts):
-    sh(['opj_compress', '-i', ppm, '-o', out, '-I', '-threads', '1',
+    sh(['opj_compress', '-i', ppm, '-o', out, '-I',
         '-r', ','.join('%.6g' % r for r in ratios), *opts])
 
 
@@ -217,7 +221,7 @@ def j2k_decode(cs, out, *opts):
     """The picture of a (possibly cut) JPEG 2000 codestream; None if it does not decode."""
     if os.path.exists(out):
         os.remove(out)
-    r = sh(['opj_decompress', '-i', cs, '-o', out, '-threads', '1', '-allow-partial', *opts],
+    r = sh(['opj_decompress', '-i', cs, '-o', out, '-allow-partial', *opts],
            check=False)
     return load(out) if r.returncode == 0 and os.path.exists(out) and size(out) else None
 
@@ -685,7 +689,7 @@ def timed(run, cmd, runs, env=None):
 
 
 def speed_one(run, label, src_png, runs):
-    """Rows (task, codec) -> timing for one picture."""
+    """File sizes {codec: bytes} and timings {(task, codec): timing} of one picture."""
     d = lambda f: run.path('speed', label, f)
     im = load(src_png)
     h, w = im.shape[:2]
@@ -696,18 +700,17 @@ def speed_one(run, label, src_png, runs):
     t = {}
     t['encode', 'qcs'] = timed(run, [QCS, 'encode', '-q', ppm, qf], runs, one)
     ratio = 3.0 * w * h / size(qf)
-    t['encode', 'j2k'] = timed(run, ['opj_compress', '-i', ppm, '-o', jf, '-I', '-threads', '1',
+    t['encode', 'j2k'] = timed(run, ['opj_compress', '-i', ppm, '-o', jf, '-I',
                                      '-r', '%.6g' % ratio], runs)
     t['encode', 'jpeg'] = timed(run, ['cjpeg', '-quality', '85', '-outfile', pf, ppm], runs)
     t['decode', 'qcs'] = timed(run, [QCS, 'decode', '-q', qf, d('qcs.ppm')], runs, one)
-    t['decode', 'j2k'] = timed(run, ['opj_decompress', '-i', jf, '-o', d('j2k.ppm'),
-                                     '-threads', '1'], runs)
+    t['decode', 'j2k'] = timed(run, ['opj_decompress', '-i', jf, '-o', d('j2k.ppm')], runs)
     t['decode', 'jpeg'] = timed(run, ['djpeg', '-outfile', d('jpeg.ppm'), pf], runs)
     tw, th = w // 8, h // 8
     t['thumb', 'qcs'] = timed(run, [QCS, 'decode', '-q', qf, d('qcs-t.ppm'), '--size',
                                     '%dx%d' % (tw, th)], runs, one)
     t['thumb', 'j2k'] = timed(run, ['opj_decompress', '-i', jf, '-o', d('j2k-t.ppm'),
-                                    '-threads', '1', '-r', '3'], runs)
+                                    '-r', '3'], runs)
     t['thumb', 'jpeg'] = timed(run, ['djpeg', '-scale', '1/8', '-outfile', d('jpeg-t.ppm'), pf],
                                runs)
     files = {'qcs': size(qf), 'j2k': size(jf), 'jpeg': size(pf)}
@@ -716,7 +719,7 @@ def speed_one(run, label, src_png, runs):
                 bytes=files[codec], bpp=bpp(files[codec], w, h), wall_s=v['wall_s'],
                 user_s=v['user_s'], sys_s=v['sys_s'], maxrss_kb=v['maxrss_kb'],
                 note='median of %d runs, one thread' % runs)
-    return (w, h), files, t
+    return files, t
 
 
 def section_speed(run, photos, runs):
@@ -729,9 +732,9 @@ def section_speed(run, photos, runs):
           'peer peak MB | qcs / peer |\n|---|---|---|---|---|---|---|---|---|')
     notes = []
     tasks = {'encode': 'encode', 'decode': 'decode', 'thumb': '1/8 thumbnail'}
-    for label, src in (('%.0f Mpx %dx%d' % (bw * bh / 1e6, bw, bh), big),
-                       ('%s %dx%d' % (small.name, small.w, small.h), small.src)):
-        (w, h), files, t = speed_one(run, label.split()[0] + '-' + label.split()[-1], src, runs)
+    for label, src in (('%.0f Mpx %d×%d' % (bw * bh / 1e6, bw, bh), big),
+                       ('%s %d×%d' % (small.name, small.w, small.h), small.src)):
+        files, t = speed_one(run, os.path.splitext(os.path.basename(src))[0], src, runs)
         notes.append('%s: qcs %s B, JPEG 2000 %s B, JPEG q85 %s B' % (
             label, format(files['qcs'], ','), format(files['j2k'], ','),
             format(files['jpeg'], ',')))
@@ -740,7 +743,7 @@ def section_speed(run, photos, runs):
             for peer in ('j2k', 'jpeg'):
                 v = t[task, peer]
                 print('| %s | %s | %s | %.3f | %.3f | %.1f | %.1f | %.1f | %.1f |' % (
-                    label, tasks[task], peer, q['cpu'], v['cpu'],
+                    label, tasks[task], PEER_NAMES[peer], q['cpu'], v['cpu'],
                     q['cpu'] / v['cpu'], q['maxrss_kb'] / 1024,
                     v['maxrss_kb'] / 1024, q['maxrss_kb'] / v['maxrss_kb']))
     print('\nFile sizes: ' + '; '.join(notes) + '.')
