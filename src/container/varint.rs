@@ -42,6 +42,11 @@ pub fn write_u64(out: &mut Vec<u8>, mut v: u64) {
     }
 }
 
+/// The number of bytes of the varint of `v` (1 up to 127, 2 up to 16383, …).
+pub fn encoded_len(v: u64) -> usize {
+    (64 - v.leading_zeros() as usize).div_ceil(7).max(1)
+}
+
 /// Appends the unsigned LEB128 encoding of a `u32` field (at most 5 bytes).
 pub fn write_u32(out: &mut Vec<u8>, v: u32) {
     write_u64(out, v as u64);

@@ -256,7 +256,7 @@ pub(crate) fn encode(
 ) -> Encoded {
     let prediction = t.prediction(positions, colours);
     let (planes, layout) = t.residual(&prediction);
-    let (kernel, frac, levels, channels) = (t.kernel, t.frac, t.levels, t.channels);
+    let (kernel, frac, levels) = (t.kernel, t.frac, t.levels);
     let all: Vec<usize> = layout.passes().iter().map(Vec::len).collect();
     let (limits, limit) = match goal {
         Goal::Key(k) => (pass_limits(&layout, &PassLimit::Key(k)), PassLimit::Key(k)),
@@ -274,30 +274,133 @@ pub(crate) fn encode(
             .collect()
     };
     let mut streams = code(&limits);
-    let limit = match goal {
-        Goal::Key(_) => limit,
-        Goal::Lossless => PassLimit::Counts(all.iter().map(|&n| n as u32).collect()),
-        Goal::Bytes(budget) => {
-            let layers = layer_count(budget, first_layer);
-            let room = budget.saturating_sub(framing(layers, layout.streams()) + 8 + channels);
-            let lambda = slope_for(&streams, room);
-            let cuts: Vec<usize> = streams.iter().map(|s| cut_at(s, lambda)).collect();
-            streams = code(&cuts);
-            PassLimit::Counts(cuts.iter().map(|&n| n as u32).collect())
-        }
+    let mut header = RefinementHeader {
+        wavelet: kernel,
+        fraction_bits: frac as u8,
+        levels: levels as u8,
+        bitplanes: layout.top.clone(),
+        layers: 1,
+        limit,
     };
-    let layers = split_layers(&streams, first_layer);
-    Encoded {
-        header: RefinementHeader {
-            wavelet: kernel,
-            fraction_bits: frac as u8,
-            levels: levels as u8,
-            bitplanes: layout.top.clone(),
-            layers: layers.len() as u32,
-            limit,
-        },
-        layers,
+    match goal {
+        Goal::Key(_) => {}
+        Goal::Lossless => {
+            header.limit = PassLimit::Counts(all.iter().map(|&n| n as u32).collect());
+        }
+        Goal::Bytes(budget) => {
+            let (cut, lengths) = fill(&streams, &mut header, budget, first_layer);
+            header.limit = PassLimit::Counts(cut.iter().map(|&n| n as u32).collect());
+            for (s, len) in streams.iter_mut().zip(lengths) {
+                s.truncate(len);
+            }
+        }
     }
+    let layers = split_layers(&streams, first_layer);
+    header.layers = layers.len() as u32;
+    Encoded { header, layers }
+}
+
+/// Bytes a refinement takes in the file: its `R` chunks (tag, length, payload, CRC).
+fn size_in_file(header: &RefinementHeader, layers: &[Vec<Vec<u8>>]) -> usize {
+    layers
+        .iter()
+        .enumerate()
+        .map(|(k, segs)| {
+            let segs: Vec<&[u8]> = segs.iter().map(Vec::as_slice).collect();
+            let n = crate::container::encode_layer((k == 0).then_some(header), &segs).len();
+            1 + crate::container::varint::encoded_len(n as u64) + n + 4
+        })
+        .sum()
+}
+
+/// For a refinement of at most `budget` bytes in the file: the passes of each stream it
+/// keeps (the last of them perhaps in part) and the bytes of each stream, the streams' full
+/// codes cut there. Whole passes first, at one slope; the bytes left then go, a pass at a time
+/// in the order of their slopes, to the passes next in line, the last one cut where the budget
+/// ends (a stream's bytes decode as far as they go).
+fn fill(
+    streams: &[CodedStream],
+    header: &mut RefinementHeader,
+    budget: usize,
+    first_layer: usize,
+) -> (Vec<usize>, Vec<usize>) {
+    let n = streams.len();
+    let measure = |cut: &[usize], lengths: &[usize], header: &mut RefinementHeader| -> usize {
+        header.limit = PassLimit::Counts(cut.iter().map(|&c| c as u32).collect());
+        let kept: Vec<CodedStream> = streams
+            .iter()
+            .zip(lengths)
+            .map(|(s, &len)| {
+                let mut s = s.clone();
+                s.truncate(len);
+                s
+            })
+            .collect();
+        let layers = split_layers(&kept, first_layer);
+        header.layers = layers.len() as u32;
+        size_in_file(header, &layers)
+    };
+    // Whole passes at one slope, the framing first estimated, then measured.
+    let mut room = budget.saturating_sub(framing(layer_count(budget, first_layer), n) + 16);
+    let (mut cut, mut lengths);
+    loop {
+        let lambda = slope_for(streams, room);
+        cut = streams
+            .iter()
+            .map(|s| cut_at(s, lambda))
+            .collect::<Vec<_>>();
+        lengths = streams
+            .iter()
+            .zip(&cut)
+            .map(|(s, &k)| end_of(s, k))
+            .collect::<Vec<_>>();
+        let size = measure(&cut, &lengths, header);
+        if size <= budget || room == 0 {
+            break;
+        }
+        room = room.saturating_sub(size - budget);
+    }
+    // Then the passes next in line, best slope first, as far as the budget goes; the
+    // framing (layer tables, chunks) is taken as it is now, then measured again.
+    let framing_now = measure(&cut, &lengths, header) - lengths.iter().sum::<usize>();
+    let mut left = budget.saturating_sub(framing_now + lengths.iter().sum::<usize>());
+    let mut partial = None;
+    while left > 0 {
+        let next = (0..n)
+            .filter(|&s| cut[s] < streams[s].pass_end.len())
+            .max_by(|&a, &b| {
+                let slope = |s: usize| {
+                    let bytes = (streams[s].pass_end[cut[s]] - lengths[s]).max(1);
+                    streams[s].gain[cut[s]] / bytes as f64
+                };
+                slope(a).total_cmp(&slope(b))
+            });
+        let Some(s) = next else { break };
+        let end = streams[s].pass_end[cut[s]].min(streams[s].bytes.len());
+        let take = (end - lengths[s]).min(left);
+        lengths[s] += take;
+        left -= take;
+        cut[s] += 1;
+        if lengths[s] < end {
+            partial = Some(s);
+        }
+    }
+    // The tables' lengths may have grown by a byte or two: take them back from the last pass
+    // (or, failing that, from any stream's tail).
+    loop {
+        let size = measure(&cut, &lengths, header);
+        if size <= budget {
+            break;
+        }
+        let over = size - budget;
+        let s = partial
+            .filter(|&s| lengths[s] > 0)
+            .or_else(|| (0..n).rev().find(|&s| lengths[s] > 0));
+        let Some(s) = s else { break };
+        lengths[s] -= over.min(lengths[s]);
+    }
+    measure(&cut, &lengths, header);
+    (cut, lengths)
 }
 
 /// Layers for a refinement of about `total` bytes whose first layer holds `first`.

@@ -117,6 +117,16 @@ pub(crate) struct CodedStream {
     pub gain: Vec<f64>,
 }
 
+impl CodedStream {
+    /// Keeps the first `len` bytes (a stream decodes as far as its bytes go).
+    pub(crate) fn truncate(&mut self, len: usize) {
+        self.bytes.truncate(len);
+        for e in &mut self.pass_end {
+            *e = (*e).min(len);
+        }
+    }
+}
+
 /// Codes the first `limit` passes of a stream.
 pub(crate) fn encode_stream(state: &mut StreamState, limit: usize, weights: &[f64]) -> CodedStream {
     let mut sym = Encoding {
