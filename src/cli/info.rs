@@ -30,15 +30,20 @@ pub fn info(a: InfoArgs, ctx: &Ctx) -> Result<()> {
     }
     if let Some(h) = &ins.header {
         say!(
-            "version {}, {}×{} {:?}, {} samples, first level {}",
-            qcs::container::VERSION,
+            "version {} ({}), {}×{} {:?}, {} samples, first level {}",
+            h.version(),
+            if h.refinement {
+                "levels, then a refinement"
+            } else {
+                "levels only"
+            },
             h.width,
             h.height,
             h.layout,
             h.total_samples,
             h.first_level
         );
-        say!("coding: {}", h.coding);
+        say!("levels' coding: {}", h.coding);
         match h.lattice {
             Some(l) => say!(
                 "lattice: root {} px, origin ({}, {}) px",
@@ -87,6 +92,30 @@ pub fn info(a: InfoArgs, ctx: &Ctx) -> Result<()> {
     let missing = ins.levels.iter().filter(|l| l.chunk.is_none()).count();
     if missing > 0 {
         say!("{missing} level(s) not in the file");
+    }
+    if let (Some(r), Some(at)) = (&ins.refinement, ins.refinement_offset) {
+        let wavelet = match r.wavelet {
+            qcs::container::Wavelet::Reversible53 => "reversible 5/3",
+            qcs::container::Wavelet::Integer97 => "9/7",
+        };
+        let passes = match &r.limit {
+            qcs::container::PassLimit::Key(k) => format!("every pass with key ≥ {k}"),
+            qcs::container::PassLimit::Counts(c) => format!("passes per stream {c:?}"),
+        };
+        say!(
+            "refinement: from byte {at} (the levels end there), {} bytes: {wavelet}, {} levels, \
+             {} fraction bits, bit-planes {:?}, {passes}",
+            ins.file_len.saturating_sub(at),
+            r.levels,
+            r.fraction_bits,
+            r.bitplanes,
+        );
+        say!(
+            "refinement: {} of {} layers verified; bytes per stream {:?}",
+            ins.layers_verified,
+            r.layers,
+            ins.stream_bytes
+        );
     }
     for m in &ins.metadata {
         match m {

@@ -35,7 +35,8 @@ pub struct RenderArgs {
     /// The rendering style.
     #[arg(long, value_enum, default_value = "mosaic")]
     pub style: Style,
-    /// Number of samples (default: all of a .qcs file; 4225 for an image).
+    /// Number of samples (default: all of a .qcs file of levels only; 4225 for an image or
+    /// the picture of a .qcs file with a refinement, sampled at the sites of --sampler).
     #[arg(long, value_parser = super::parse_count)]
     pub samples: Option<usize>,
     /// Output size: WxH, or W, Wx or xH keeping the aspect ratio (default: the image's size;
@@ -150,13 +151,28 @@ fn samples(a: &RenderArgs, ctx: &Ctx) -> Result<Option<Samples>> {
         .with_context(what)?
         .ok()
         .with_context(what)?;
-        return qcs_samples(a, input, ctx);
+        if !input.header.as_ref().is_some_and(|h| h.refinement) {
+            return qcs_samples(a, input, ctx);
+        }
+        // A file with a refinement has few samples of its own: its picture is sampled as an
+        // image is.
+        let opts = qcs::DecodeOptions {
+            limits: ctx.limits.clone(),
+            ..Default::default()
+        };
+        let picture = qcs::decode(&input.bytes, &opts).with_context(what)?;
+        return sampled(a, picture.image.to_rgb8(), ctx).map(Some);
     }
     super::input::check_image_start(&mut src)?;
     let bytes = super::input::read_all(src, ctx)?;
     let img = image::load_from_memory(&bytes)
         .with_context(|| format!("cannot read image {}", a.input.display()))?
         .to_rgb8();
+    sampled(a, img, ctx).map(Some)
+}
+
+/// An image's samples, at the sites of `--sampler`, coloured by the area each site covers.
+fn sampled(a: &RenderArgs, img: image::RgbImage, ctx: &Ctx) -> Result<Samples> {
     let (w, h) = img.dimensions();
     let n = a.samples.unwrap_or(4225);
     ctx.limits
@@ -177,12 +193,12 @@ fn samples(a: &RenderArgs, ctx: &Ctx) -> Result<Option<Samples>> {
         (sampler.sites(w, h, n), None)
     };
     let col = SourceImage::new(img.as_raw(), w, h, 3)?.colours(&pos, SampleColour::Area, n);
-    Ok(Some(Samples {
+    Ok(Samples {
         pos,
         col,
         source: (w, h),
         exact,
-    }))
+    })
 }
 
 pub fn render(a: RenderArgs, ctx: &Ctx) -> Result<()> {
