@@ -295,6 +295,39 @@ impl RangeDecoder {
         (hi < self.range as u64).then_some(hi as u32)
     }
 
+    /// Whether [`RangeDecoder::decode_fast`] may decode bits that read up to `margin` more
+    /// bytes: the decoder has started, every byte it holds has arrived (missing ones are
+    /// taken in now), and `margin` more have too.
+    pub(crate) fn ready_for_fast(&mut self, bytes: &[u8], margin: usize) -> bool {
+        if !self.started || bytes.len() < self.pos + margin {
+            return false;
+        }
+        self.refresh(bytes, usize::MAX);
+        self.missing == 0
+    }
+
+    /// [`RangeDecoder::decode`] when [`RangeDecoder::ready_for_fast`] said so: no byte is
+    /// missing, and the bytes it reads are there.
+    #[inline(always)]
+    pub(crate) fn decode_fast(&mut self, p: &mut Prob, bytes: &[u8]) -> bool {
+        let bound = (self.range >> PROB_BITS) * p.p as u32;
+        let bit = if self.lo < bound {
+            self.range = bound;
+            false
+        } else {
+            self.lo -= bound;
+            self.range -= bound;
+            true
+        };
+        while self.range < TOP {
+            self.range <<= 8;
+            self.lo = (self.lo << 8) | bytes[self.pos] as u32;
+            self.pos += 1;
+        }
+        p.update(bit);
+        bit
+    }
+
     /// Decodes one bit with probability `p` (then adapts `p`), from `bytes` (received so far)
     /// of a payload of `len` bytes. `None`: the bytes received do not decide the bit; `p` is
     /// unchanged.

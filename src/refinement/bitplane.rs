@@ -1,12 +1,19 @@
 //! The bit-plane coder: the passes of a stream over its bands, shared by the encoder and the
-//! decoder (spec/format.md, *Refinement: coding a pass*).
+//! decoder (spec/refinement.md §6).
 //!
 //! A stream is a sequence of [`Pass`]es over bands (one band of one channel each). A pass codes
 //! one bit-plane of a band, block by block in [`block_order`], each block in stripes of four
 //! rows, column by column (JPEG 2000's scan). Its *units* are what a decoder commits at once:
-//! a block's activation flag, or one stripe column (up to four coefficients). A decoder that
-//! runs out of bytes inside a unit rolls it back and resumes there when more bytes arrive, so
-//! the state after any number of bytes is that of the last complete unit.
+//! a band's or a block's activation flag, or one stripe column (up to four coefficients). A
+//! decoder near the end of the bytes it has codes unit by unit, journalling each so that one
+//! the bytes do not decide is rolled back (it resumes there when more bytes arrive); with
+//! bytes to spare, it codes a whole block at a time with no journal.
+//!
+//! Per coefficient the state is 3 bytes: its magnitude bits below 2^16 and one byte of flags
+//! (the bits from 2^16 up, which no file an encoder writes for 8-bit pictures has, go to a
+//! second array made when first needed); the lowest bit-plane known of a significant
+//! coefficient is its band's current bit-plane or the one above, told apart by a parity flag
+//! (every significant coefficient is refined at every bit-plane).
 
 use super::schedule::{block_order, Band, Orient, Pass, PassKind, BLOCK};
 use crate::coding::range::{Prob, RangeDecoder, RangeEncoder};
@@ -15,6 +22,8 @@ const SIG: u8 = 1;
 const VISITED: u8 = 2;
 const REFINED: u8 = 4;
 const NEG: u8 = 8;
+/// The parity of the bit-plane the coefficient was last coded at.
+const ODD: u8 = 16;
 
 // Context layout within one (channel class, orientation) set.
 const CTX_SIG: usize = 0; // 9
@@ -31,6 +40,88 @@ pub(crate) const STREAM_CONTEXTS: usize = 3 * 4 * CTX_SET;
 /// Which context set a channel uses: 0 luma (or grey), 1 chroma, 2 alpha.
 pub(crate) type ChannelClass = u8;
 
+/// Neighbour bits of a coefficient's pattern: left, right, up, down, and the diagonals.
+const N_LEFT: u8 = 1;
+const N_RIGHT: u8 = 2;
+const N_UP: u8 = 4;
+const N_DOWN: u8 = 8;
+
+/// The significance context of every neighbour pattern, per orientation.
+static SIG_CONTEXT: [[u8; 256]; 4] = sig_context_table();
+
+const fn sig_context_table() -> [[u8; 256]; 4] {
+    let mut t = [[0u8; 256]; 4];
+    let mut o = 0;
+    while o < 4 {
+        let mut n = 0;
+        while n < 256 {
+            let n32 = n as u32;
+            let h = (n32 & 1) + ((n32 >> 1) & 1);
+            let v = ((n32 >> 2) & 1) + ((n32 >> 3) & 1);
+            let d = ((n32 >> 4) & 1) + ((n32 >> 5) & 1) + ((n32 >> 6) & 1) + ((n32 >> 7) & 1);
+            let orient = match o {
+                0 => Orient::LowLow,
+                1 => Orient::HighLow,
+                2 => Orient::LowHigh,
+                _ => Orient::HighHigh,
+            };
+            t[o][n] = sig_context(orient, h, v, d) as u8;
+            n += 1;
+        }
+        o += 1;
+    }
+    t
+}
+
+/// JPEG 2000's significance contexts (ISO/IEC 15444-1 Table D.1): from the numbers of
+/// significant horizontal, vertical and diagonal neighbours.
+const fn sig_context(orient: Orient, h: u32, v: u32, d: u32) -> usize {
+    if let Orient::HighHigh = orient {
+        let hv = h + v;
+        return match d {
+            3.. => 8,
+            2 => 6 + (hv >= 1) as usize,
+            1 => 3 + if hv > 2 { 2 } else { hv as usize },
+            _ => {
+                if hv > 2 {
+                    2
+                } else {
+                    hv as usize
+                }
+            }
+        };
+    }
+    // Vertical edges (high horizontally) look along columns: swap.
+    let (h, v) = if let Orient::HighLow = orient {
+        (v, h)
+    } else {
+        (h, v)
+    };
+    match h {
+        2 => 8,
+        1 => {
+            if v >= 1 {
+                7
+            } else if d >= 1 {
+                6
+            } else {
+                5
+            }
+        }
+        _ => match v {
+            2 => 4,
+            1 => 3,
+            _ => {
+                if d > 2 {
+                    2
+                } else {
+                    d as usize
+                }
+            }
+        },
+    }
+}
+
 /// One band of one channel, with what is known of its coefficients.
 #[derive(Clone, Debug)]
 pub(crate) struct BandState {
@@ -38,12 +129,15 @@ pub(crate) struct BandState {
     pub class: ChannelClass,
     /// Row stride of `flags`: the band's width plus a border column on each side.
     pw: usize,
-    /// Per coefficient, with a one-coefficient border of zeros: SIG, VISITED, REFINED, NEG.
+    /// Per coefficient, with a one-coefficient border of zeros: SIG, VISITED, REFINED, NEG,
+    /// ODD.
     flags: Vec<u8>,
-    /// The magnitude bits known so far.
-    pub mag: Vec<u32>,
-    /// For a significant coefficient, the lowest bit-plane known.
-    pub known: Vec<u8>,
+    /// The magnitude bits known so far, below 2^16 (row-major, the band's width)…
+    low: Vec<u16>,
+    /// … and from 2^16 up (empty until the first).
+    high: Vec<u16>,
+    /// The bit-plane of the band's latest pass.
+    current: u8,
     /// Whether each block holds a significant coefficient.
     block_active: Vec<bool>,
     /// Whether any block does.
@@ -62,8 +156,9 @@ impl BandState {
             class,
             pw,
             flags: vec![0; pw * (band.h + 2)],
-            mag: vec![0; band.len()],
-            known: vec![0; band.len()],
+            low: vec![0; band.len()],
+            high: Vec::new(),
+            current: 0,
             block_active: vec![false; bw * bh],
             band_active: false,
             order: block_order(&band),
@@ -76,40 +171,101 @@ impl BandState {
         (y + 1) * self.pw + x + 1
     }
 
-    /// The value a decoder reconstructs for coefficient `i` (band-local index): zero unless
-    /// significant; else the known bits plus 3/8 of the unknown interval below them.
-    #[inline]
-    pub(crate) fn value(&self, x: usize, y: usize) -> i32 {
-        let f = self.flags[self.fi(x, y)];
+    /// The reconstruction of a coefficient from its flags and magnitude bits, the band's
+    /// current bit-plane being `current` (spec/refinement.md §7).
+    #[inline(always)]
+    fn value_of(f: u8, m: u32, current: u8) -> i32 {
         if f & SIG == 0 {
             return 0;
         }
-        let i = y * self.band.w + x;
-        let k = self.known[i] as u32;
-        let m = self.mag[i] + ((3u32 << k) >> 3);
+        let k = current as u32 + ((f & ODD != 0) != (current & 1 == 1)) as u32;
+        let m = (m + ((3u32 << k) >> 3)) as i32;
         if f & NEG != 0 {
-            -(m as i32)
+            -m
         } else {
-            m as i32
+            m
         }
     }
 
-    /// Significant horizontal, vertical and diagonal neighbours.
+    /// The lowest bit-plane known of coefficient (x, y), if it is significant.
+    #[cfg(test)]
+    pub(crate) fn known(&self, x: usize, y: usize) -> Option<u32> {
+        let f = self.flags[self.fi(x, y)];
+        (f & SIG != 0)
+            .then(|| self.current as u32 + ((f & ODD != 0) != (self.current & 1 == 1)) as u32)
+    }
+
+    /// The magnitude bits of coefficient `i` (band-local index).
     #[inline(always)]
-    fn neighbours(&self, fi: usize) -> (u32, u32, u32) {
-        let f = &self.flags;
-        let pw = self.pw;
-        let s = |i: usize| (f[i] & SIG) as u32;
-        let h = s(fi - 1) + s(fi + 1);
-        let v = s(fi - pw) + s(fi + pw);
-        let d = s(fi - pw - 1) + s(fi - pw + 1) + s(fi + pw - 1) + s(fi + pw + 1);
-        (h, v, d)
+    pub(crate) fn mag(&self, i: usize) -> u32 {
+        let high = if self.high.is_empty() {
+            0
+        } else {
+            self.high[i]
+        };
+        self.low[i] as u32 | (high as u32) << 16
     }
 
     #[inline(always)]
-    fn sig_context(&self, fi: usize) -> usize {
-        let (h, v, d) = self.neighbours(fi);
-        sig_context(self.band.orient, h, v, d)
+    fn set_mag(&mut self, i: usize, m: u32) {
+        self.low[i] = m as u16;
+        if m >> 16 != 0 || !self.high.is_empty() {
+            if self.high.is_empty() {
+                self.high = vec![0; self.low.len()];
+            }
+            self.high[i] = (m >> 16) as u16;
+        }
+    }
+
+    /// The value a decoder reconstructs for coefficient (x, y).
+    #[inline]
+    pub(crate) fn value(&self, x: usize, y: usize) -> i32 {
+        let f = self.flags[self.fi(x, y)];
+        Self::value_of(f, self.mag(y * self.band.w + x), self.current)
+    }
+
+    /// Row `y`'s reconstructed values, into `out` (the band's width).
+    pub(crate) fn row_values(&self, y: usize, out: &mut [i32]) {
+        let w = self.band.w;
+        let flags = &self.flags[self.fi(0, y)..self.fi(0, y) + w];
+        let low = &self.low[y * w..(y + 1) * w];
+        if self.high.is_empty() {
+            for ((o, &f), &m) in out.iter_mut().zip(flags).zip(low) {
+                *o = Self::value_of(f, m as u32, self.current);
+            }
+        } else {
+            let high = &self.high[y * w..(y + 1) * w];
+            for (((o, &f), &m), &h) in out.iter_mut().zip(flags).zip(low).zip(high) {
+                *o = Self::value_of(f, m as u32 | (h as u32) << 16, self.current);
+            }
+        }
+    }
+
+    /// Frees the band's state (its values were taken).
+    pub(crate) fn release(&mut self) {
+        self.flags = Vec::new();
+        self.low = Vec::new();
+        self.high = Vec::new();
+        self.block_active = Vec::new();
+        self.order = Vec::new();
+        self.truth = Vec::new();
+    }
+
+    /// The significance of the 8 neighbours, as N_LEFT, N_RIGHT, N_UP, N_DOWN and four
+    /// diagonal bits.
+    #[inline(always)]
+    fn pattern(&self, fi: usize) -> u8 {
+        let f = &self.flags;
+        let pw = self.pw;
+        let s = |i: usize| f[i] & SIG;
+        s(fi - 1)
+            | s(fi + 1) << 1
+            | s(fi - pw) << 2
+            | s(fi + pw) << 3
+            | s(fi - pw - 1) << 4
+            | s(fi - pw + 1) << 5
+            | s(fi + pw - 1) << 6
+            | s(fi + pw + 1) << 7
     }
 
     #[inline(always)]
@@ -160,48 +316,6 @@ impl BandState {
     }
 }
 
-/// JPEG 2000's significance contexts (ISO/IEC 15444-1 Table D.1): from the numbers of
-/// significant horizontal, vertical and diagonal neighbours.
-#[inline(always)]
-fn sig_context(orient: Orient, h: u32, v: u32, d: u32) -> usize {
-    match orient {
-        Orient::HighHigh => {
-            let hv = h + v;
-            match d {
-                3.. => 8,
-                2 => 6 + (hv >= 1) as usize,
-                1 => 3 + (hv.min(2)) as usize,
-                _ => hv.min(2) as usize,
-            }
-        }
-        _ => {
-            // Vertical edges (high horizontally) look along columns: swap.
-            let (h, v) = if orient == Orient::HighLow {
-                (v, h)
-            } else {
-                (h, v)
-            };
-            match h {
-                2 => 8,
-                1 => {
-                    if v >= 1 {
-                        7
-                    } else if d >= 1 {
-                        6
-                    } else {
-                        5
-                    }
-                }
-                _ => match v {
-                    2 => 4,
-                    1 => 3,
-                    _ => d.min(2) as usize,
-                },
-            }
-        }
-    }
-}
-
 /// A coder of binary decisions: the range encoder, or a decoder that may run out of bytes.
 pub(crate) trait Symbols {
     /// Whether this codes the truth (the encoder) rather than reading bits.
@@ -209,8 +323,11 @@ pub(crate) trait Symbols {
     /// Codes `bit` (encoder) or decodes one (decoder; `None` when the bytes so far do not
     /// decide it) with the probability `probs[ctx]`, which then adapts.
     fn code(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> Option<bool>;
-    /// Called before each unit.
-    fn begin_unit(&mut self) {}
+    /// Called before each unit (or block); whether it may run out of bytes, so must be coded
+    /// a unit at a time and journalled.
+    fn begin_unit(&mut self) -> bool {
+        false
+    }
     /// Called when a unit ran out of bytes: puts back the coder and the probabilities it
     /// changed as they were at the unit's start.
     fn rollback(&mut self, _probs: &mut [Prob]) {}
@@ -232,7 +349,8 @@ impl Symbols for Encoding {
 
 /// The decoder side over the bytes of a stream received so far (what follows them is
 /// unknown). Near their end, every probability a unit changes is journalled so that the unit
-/// can be rolled back if the bytes do not decide it.
+/// can be rolled back if the bytes do not decide it; with bytes to spare, bits are decoded on
+/// the fast path.
 pub(crate) struct Decoding<'a> {
     pub dec: RangeDecoder,
     pub bytes: &'a [u8],
@@ -241,9 +359,10 @@ pub(crate) struct Decoding<'a> {
     careful: bool,
 }
 
-/// Bytes a unit can read at most (11 decisions of at most 12 bits each, and the 4-byte code
-/// window), with room to spare: with more than this left, a unit cannot run out.
-const UNIT_BYTES: usize = 64;
+/// Bytes a block's pass can read at most (1024 coefficients, each at most a significance,
+/// a sign and a run or block decision of at most 12 bits; and the 4-byte code window), with
+/// room to spare: with more than this left, it cannot run out.
+const BLOCK_BYTES: usize = 8 * 1024;
 
 impl<'a> Decoding<'a> {
     pub(crate) fn new(dec: RangeDecoder, bytes: &'a [u8]) -> Self {
@@ -261,25 +380,27 @@ impl Symbols for Decoding<'_> {
     const ENCODES: bool = false;
     #[inline(always)]
     fn code(&mut self, probs: &mut [Prob], ctx: usize, _bit: bool) -> Option<bool> {
-        if self.careful {
-            self.journal.push((ctx, probs[ctx]));
+        if !self.careful {
+            return Some(self.dec.decode_fast(&mut probs[ctx], self.bytes));
         }
+        self.journal.push((ctx, probs[ctx]));
         self.dec.decode(&mut probs[ctx], self.bytes, usize::MAX)
     }
 
     #[inline(always)]
-    fn begin_unit(&mut self) {
-        self.careful = self.bytes.len() < self.dec.position() + UNIT_BYTES;
+    fn begin_unit(&mut self) -> bool {
+        self.careful = !self.dec.ready_for_fast(self.bytes, BLOCK_BYTES);
         if self.careful {
             self.saved = self.dec;
             self.journal.clear();
         }
+        self.careful
     }
 
     fn rollback(&mut self, probs: &mut [Prob]) {
         assert!(
             self.careful,
-            "a unit ran out of bytes with {UNIT_BYTES} to spare"
+            "a block ran out of bytes with {BLOCK_BYTES} to spare"
         );
         for &(ctx, p) in self.journal.iter().rev() {
             probs[ctx] = p;
@@ -319,9 +440,10 @@ pub(crate) struct StreamState {
 /// What a unit changed, to undo it.
 #[derive(Default)]
 struct Undo {
-    coefficients: Vec<(usize, usize, u8, u32, u8)>,
+    coefficients: Vec<(usize, usize, u8, u32)>,
     block: Option<(usize, bool)>,
     band_active: bool,
+    current: u8,
 }
 
 /// The encoder's account of a unit: how much it lowered the squared error of its band's
@@ -348,6 +470,14 @@ impl Tally for ErrorDrop {
     fn gain(&mut self, before: i64, after: i64) {
         self.0 += (before * before - after * after) as f64;
     }
+}
+
+/// What a step of the pass runner did.
+enum Step {
+    /// Coded a unit (or a block); the pass goes on.
+    More,
+    /// The pass is complete.
+    PassDone,
 }
 
 impl StreamState {
@@ -384,9 +514,8 @@ impl StreamState {
         self.targets[k]
     }
 
-    /// Codes units until `limit` passes are done, or (decoder) the bytes run out. `tally`
-    /// hears of every change to a coefficient's reconstruction; `pass_done(k)` of every
-    /// completed pass.
+    /// Codes until `limit` passes are done, or (decoder) the bytes run out. `tally` hears of
+    /// every change to a coefficient's reconstruction; `pass_done(k)` of every completed pass.
     pub(crate) fn run<S: Symbols, T: Tally>(
         &mut self,
         sym: &mut S,
@@ -396,37 +525,41 @@ impl StreamState {
     ) {
         let mut undo = Undo::default();
         while self.cursor.pass < limit.min(self.passes.len()) {
-            sym.begin_unit();
+            let careful = sym.begin_unit();
             let saved_cursor = self.cursor;
-            undo.coefficients.clear();
-            undo.block = None;
-            undo.band_active = self.bands[self.targets[self.cursor.pass]].band_active;
-            let journal = !S::ENCODES;
-            let done = self.unit(sym, tally, journal.then_some(&mut undo));
+            let done = if careful {
+                let b = &self.bands[self.targets[self.cursor.pass]];
+                undo.coefficients.clear();
+                undo.block = None;
+                undo.band_active = b.band_active;
+                undo.current = b.current;
+                self.step(sym, tally, Some(&mut undo))
+            } else {
+                self.step(sym, tally, None)
+            };
             match done {
-                Some(pass_finished) => {
-                    if pass_finished {
-                        let k = self.cursor.pass;
-                        self.cursor = Cursor {
-                            pass: k + 1,
-                            ..Cursor::default()
-                        };
-                        pass_done(sym, tally, k);
-                    }
+                Some(Step::More) => {}
+                Some(Step::PassDone) => {
+                    let k = self.cursor.pass;
+                    self.cursor = Cursor {
+                        pass: k + 1,
+                        ..Cursor::default()
+                    };
+                    pass_done(sym, tally, k);
                 }
                 None => {
                     // Out of bytes: undo the unit and stop.
                     sym.rollback(&mut self.probs);
                     let b = &mut self.bands[self.targets[saved_cursor.pass]];
-                    for &(fi, i, f, m, k) in undo.coefficients.iter().rev() {
+                    for &(fi, i, f, m) in undo.coefficients.iter().rev() {
                         b.flags[fi] = f;
-                        b.mag[i] = m;
-                        b.known[i] = k;
+                        b.set_mag(i, m);
                     }
                     if let Some((blk, a)) = undo.block {
                         b.block_active[blk] = a;
                     }
                     b.band_active = undo.band_active;
+                    b.current = undo.current;
                     self.cursor = saved_cursor;
                     return;
                 }
@@ -434,13 +567,14 @@ impl StreamState {
         }
     }
 
-    /// Codes the next unit of the current pass; `Some(true)` when the pass is then complete.
-    fn unit<S: Symbols, T: Tally>(
+    /// Codes the next unit of the current pass, or with no journal (`undo` is `None`: bytes
+    /// to spare) the rest of the current block.
+    fn step<S: Symbols, T: Tally>(
         &mut self,
         sym: &mut S,
         tally: &mut T,
-        undo: Option<&mut Undo>,
-    ) -> Option<bool> {
+        mut undo: Option<&mut Undo>,
+    ) -> Option<Step> {
         let pass = self.passes[self.cursor.pass];
         let ti = self.targets[self.cursor.pass];
         let band = &mut self.bands[ti];
@@ -449,162 +583,229 @@ impl StreamState {
         let cur = &mut self.cursor;
         let p = pass.bitplane as u32;
         if band.order.is_empty() {
-            return Some(true);
+            return Some(Step::PassDone);
         }
+        band.current = pass.bitplane;
         // A cleanup of a band without active blocks starts with the band's flag.
         if pass.kind == PassKind::Cleanup && !band.band_active && !cur.band_open && cur.block == 0 {
             let truth = S::ENCODES && band_has_new(band, p);
-            let bit = sym.code(probs, set + CTX_BAND, truth)?;
-            if !bit {
-                return Some(true);
+            if !sym.code(probs, set + CTX_BAND, truth)? {
+                return Some(Step::PassDone);
             }
             cur.band_open = true;
-            return Some(false);
+            return Some(Step::More);
         }
         let (bx, by) = band.order[cur.block];
         let (bw, _) = band.band.blocks();
         let blk = by as usize * bw + bx as usize;
-        let active = band.block_active[blk];
-        if !active && !cur.block_open {
+        if !band.block_active[blk] && !cur.block_open {
             match pass.kind {
-                PassKind::Propagation | PassKind::Refinement => return Some(next_block(band, cur)),
+                PassKind::Propagation | PassKind::Refinement => {
+                    return Some(next_block(band, cur));
+                }
                 PassKind::Cleanup => {
                     let truth = S::ENCODES && block_has_new(band, bx, by, p);
                     let ctx = set + CTX_BLOCK + band.block_context(bx as usize, by as usize);
-                    let bit = sym.code(probs, ctx, truth)?;
-                    if !bit {
+                    if !sym.code(probs, ctx, truth)? {
                         return Some(next_block(band, cur));
                     }
                     cur.block_open = true;
-                    return Some(false);
+                    if undo.is_some() {
+                        return Some(Step::More);
+                    }
                 }
             }
         }
-        // One stripe column of the block.
+        // Stripe columns of the block: one (journalled), or all that are left.
         let x0 = bx as usize * BLOCK;
         let y0 = by as usize * BLOCK;
         let cols = BLOCK.min(band.band.w - x0);
         let rows = BLOCK.min(band.band.h - y0);
-        let stripe = cur.column / cols;
-        let x = x0 + cur.column % cols;
-        let ys = y0 + 4 * stripe;
-        let ye = (ys + 4).min(y0 + rows);
-        if let Some(u) = undo {
-            for y in ys..ye {
-                let fi = band.fi(x, y);
-                let i = y * band.band.w + x;
-                u.coefficients
-                    .push((fi, i, band.flags[fi], band.mag[i], band.known[i]));
-            }
+        let columns = cols * rows.div_ceil(4);
+        if let Some(u) = undo.as_deref_mut() {
             u.block = Some((blk, band.block_active[blk]));
         }
-        match pass.kind {
-            PassKind::Propagation => {
+        loop {
+            let stripe = cur.column / cols;
+            let x = x0 + cur.column % cols;
+            let ys = y0 + 4 * stripe;
+            let ye = (ys + 4).min(y0 + rows);
+            if let Some(u) = undo.as_deref_mut() {
                 for y in ys..ye {
                     let fi = band.fi(x, y);
-                    if band.flags[fi] & SIG == 0 {
-                        let (h, v, d) = band.neighbours(fi);
-                        if h + v + d > 0 {
-                            let ctx = set + CTX_SIG + sig_context(band.band.orient, h, v, d);
-                            code_significance(band, sym, probs, tally, x, y, p, ctx, set)?;
-                            band.flags[fi] |= VISITED;
-                        }
-                    }
+                    let i = y * band.band.w + x;
+                    u.coefficients.push((fi, i, band.flags[fi], band.mag(i)));
                 }
             }
-            PassKind::Refinement => {
-                for y in ys..ye {
-                    let fi = band.fi(x, y);
-                    let f = band.flags[fi];
-                    if f & SIG != 0 && f & VISITED == 0 {
-                        let ctx = if f & REFINED != 0 {
-                            2
-                        } else {
-                            let (h, v, d) = band.neighbours(fi);
-                            (h + v + d > 0) as usize
-                        };
-                        let i = y * band.band.w + x;
-                        let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
-                        let before = if T::COUNTS { band.value(x, y) } else { 0 };
-                        let bit = sym.code(probs, set + CTX_REF + ctx, truth)?;
-                        band.mag[i] |= (bit as u32) << p;
-                        band.known[i] = p as u8;
-                        band.flags[fi] |= REFINED;
-                        if T::COUNTS {
-                            let t = band.truth[i] as i64;
-                            tally.gain(t - before as i64, t - band.value(x, y) as i64);
-                        }
-                    }
-                }
+            match pass.kind {
+                PassKind::Propagation => propagate(band, sym, probs, tally, set, x, ys, ye, p)?,
+                PassKind::Refinement => refine(band, sym, probs, tally, set, x, ys, ye, p)?,
+                PassKind::Cleanup => clean(band, sym, probs, tally, set, x, ys, ye, p)?,
             }
-            PassKind::Cleanup => {
-                let mut y = ys;
-                if ye - ys == 4 {
-                    let quiet = (ys..ye).all(|yy| {
-                        let fi = band.fi(x, yy);
-                        band.flags[fi] & (SIG | VISITED) == 0 && {
-                            let (h, v, d) = band.neighbours(fi);
-                            h + v + d == 0
-                        }
-                    });
-                    if quiet {
-                        let first = if S::ENCODES {
-                            (ys..ye).position(|yy| {
-                                let i = yy * band.band.w + x;
-                                (band.truth[i].unsigned_abs() >> p) & 1 != 0
-                            })
-                        } else {
-                            None
-                        };
-                        let any = sym.code(probs, set + CTX_RUN, first.is_some())?;
-                        if any {
-                            let k = first.unwrap_or(0);
-                            let hi = sym.code(probs, set + CTX_UNI, k & 2 != 0)?;
-                            let lo = sym.code(probs, set + CTX_UNI + 1, k & 1 != 0)?;
-                            let k = 2 * hi as usize + lo as usize;
-                            let yy = ys + k;
-                            let fi = band.fi(x, yy);
-                            let (sc, flip) = band.sign_context(fi);
-                            let i = yy * band.band.w + x;
-                            let neg_truth = S::ENCODES && band.truth[i] < 0;
-                            let neg =
-                                sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
-                            make_significant(band, tally, x, yy, p, neg);
-                            y = yy + 1;
-                        } else {
-                            y = ye;
-                        }
-                    }
-                }
-                while y < ye {
-                    let fi = band.fi(x, y);
-                    if band.flags[fi] & (SIG | VISITED) == 0 {
-                        let ctx = set + CTX_SIG + band.sig_context(fi);
-                        code_significance(band, sym, probs, tally, x, y, p, ctx, set)?;
-                    }
-                    y += 1;
-                }
-                for yy in ys..ye {
-                    let fi = band.fi(x, yy);
-                    band.flags[fi] &= !VISITED;
-                }
+            cur.column += 1;
+            if cur.column == columns {
+                return Some(next_block(band, cur));
+            }
+            if undo.is_some() {
+                return Some(Step::More);
             }
         }
-        // Next stripe column, or the next block.
-        cur.column += 1;
-        if cur.column == cols * rows.div_ceil(4) {
-            return Some(next_block(band, cur));
-        }
-        Some(false)
     }
 }
 
-/// Moves the cursor to the next block; `true` when the band's blocks are all done.
-fn next_block(band: &BandState, cur: &mut Cursor) -> bool {
+/// Moves the cursor to the next block; the pass is done after its last block.
+fn next_block(band: &BandState, cur: &mut Cursor) -> Step {
     cur.block += 1;
     cur.column = 0;
     cur.block_open = false;
-    cur.block == band.order.len()
+    if cur.block == band.order.len() {
+        Step::PassDone
+    } else {
+        Step::More
+    }
+}
+
+/// The parity flag of bit-plane `p`.
+#[inline(always)]
+fn parity(p: u32) -> u8 {
+    if p & 1 == 1 {
+        ODD
+    } else {
+        0
+    }
+}
+
+/// A propagation pass over the stripe column x, rows ys..ye.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn propagate<S: Symbols, T: Tally>(
+    band: &mut BandState,
+    sym: &mut S,
+    probs: &mut [Prob],
+    tally: &mut T,
+    set: usize,
+    x: usize,
+    ys: usize,
+    ye: usize,
+    p: u32,
+) -> Option<()> {
+    let orient = band.band.orient as usize;
+    for y in ys..ye {
+        let fi = band.fi(x, y);
+        if band.flags[fi] & SIG == 0 {
+            let n = band.pattern(fi);
+            if n != 0 {
+                let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n as usize] as usize;
+                code_significance(band, sym, probs, tally, x, y, p, ctx, set)?;
+                band.flags[fi] |= VISITED;
+            }
+        }
+    }
+    Some(())
+}
+
+/// A refinement pass over the stripe column x, rows ys..ye.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn refine<S: Symbols, T: Tally>(
+    band: &mut BandState,
+    sym: &mut S,
+    probs: &mut [Prob],
+    tally: &mut T,
+    set: usize,
+    x: usize,
+    ys: usize,
+    ye: usize,
+    p: u32,
+) -> Option<()> {
+    for y in ys..ye {
+        let fi = band.fi(x, y);
+        let f = band.flags[fi];
+        if f & (SIG | VISITED) == SIG {
+            let ctx = if f & REFINED != 0 {
+                2
+            } else {
+                (band.pattern(fi) != 0) as usize
+            };
+            let i = y * band.band.w + x;
+            let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
+            let before = if T::COUNTS { band.value(x, y) } else { 0 };
+            let bit = sym.code(probs, set + CTX_REF + ctx, truth)?;
+            if p < 16 {
+                band.low[i] |= (bit as u16) << p;
+            } else {
+                band.set_mag(i, band.mag(i) | (bit as u32) << p);
+            }
+            band.flags[fi] = (f & !ODD) | REFINED | parity(p);
+            if T::COUNTS {
+                let t = band.truth[i] as i64;
+                tally.gain(t - before as i64, t - band.value(x, y) as i64);
+            }
+        }
+    }
+    Some(())
+}
+
+/// A cleanup pass over the stripe column x, rows ys..ye (then they are no longer visited).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn clean<S: Symbols, T: Tally>(
+    band: &mut BandState,
+    sym: &mut S,
+    probs: &mut [Prob],
+    tally: &mut T,
+    set: usize,
+    x: usize,
+    ys: usize,
+    ye: usize,
+    p: u32,
+) -> Option<()> {
+    let orient = band.band.orient as usize;
+    let mut y = ys;
+    if ye - ys == 4 {
+        let quiet = (ys..ye).all(|yy| {
+            let fi = band.fi(x, yy);
+            band.flags[fi] & (SIG | VISITED) == 0 && band.pattern(fi) == 0
+        });
+        if quiet {
+            let first = if S::ENCODES {
+                (ys..ye).position(|yy| {
+                    let i = yy * band.band.w + x;
+                    (band.truth[i].unsigned_abs() >> p) & 1 != 0
+                })
+            } else {
+                None
+            };
+            if sym.code(probs, set + CTX_RUN, first.is_some())? {
+                let k = first.unwrap_or(0);
+                let hi = sym.code(probs, set + CTX_UNI, k & 2 != 0)?;
+                let lo = sym.code(probs, set + CTX_UNI + 1, k & 1 != 0)?;
+                let yy = ys + 2 * hi as usize + lo as usize;
+                let fi = band.fi(x, yy);
+                let (sc, flip) = band.sign_context(fi);
+                let i = yy * band.band.w + x;
+                let neg_truth = S::ENCODES && band.truth[i] < 0;
+                let neg = sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
+                make_significant(band, tally, x, yy, p, neg);
+                y = yy + 1;
+            } else {
+                y = ye;
+            }
+        }
+    }
+    while y < ye {
+        let fi = band.fi(x, y);
+        if band.flags[fi] & (SIG | VISITED) == 0 {
+            let ctx = set + CTX_SIG + SIG_CONTEXT[orient][band.pattern(fi) as usize] as usize;
+            code_significance(band, sym, probs, tally, x, y, p, ctx, set)?;
+        }
+        y += 1;
+    }
+    for yy in ys..ye {
+        let fi = band.fi(x, yy);
+        band.flags[fi] &= !VISITED;
+    }
+    Some(())
 }
 
 /// Codes whether coefficient (x, y), insignificant so far, is significant at bit-plane `p`,
@@ -645,9 +846,8 @@ fn make_significant<T: Tally>(
 ) {
     let fi = band.fi(x, y);
     let i = y * band.band.w + x;
-    band.flags[fi] |= SIG | if neg { NEG } else { 0 };
-    band.mag[i] = 1 << p;
-    band.known[i] = p as u8;
+    band.flags[fi] = (band.flags[fi] & !ODD) | SIG | if neg { NEG } else { 0 } | parity(p);
+    band.set_mag(i, 1 << p);
     let (bw, _) = band.band.blocks();
     band.block_active[(y / BLOCK) * bw + x / BLOCK] = true;
     band.band_active = true;
@@ -672,4 +872,20 @@ fn block_has_new(band: &BandState, bx: u32, by: u32, p: u32) -> bool {
 /// Encoder: whether any coefficient of a band without significant ones becomes significant.
 fn band_has_new(band: &BandState, p: u32) -> bool {
     band.truth.iter().any(|&t| (t.unsigned_abs() >> p) & 1 != 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_context_table_is_jpeg_2000_s() {
+        // Spot checks of ISO/IEC 15444-1 Table D.1.
+        assert_eq!(SIG_CONTEXT[0][0], 0);
+        assert_eq!(SIG_CONTEXT[0][(N_LEFT | N_RIGHT) as usize], 8);
+        assert_eq!(SIG_CONTEXT[0][(N_UP | N_DOWN) as usize], 4);
+        assert_eq!(SIG_CONTEXT[1][(N_UP | N_DOWN) as usize], 8); // HL swaps
+        assert_eq!(SIG_CONTEXT[3][0b1111_0000], 8); // HH: four diagonals
+        assert_eq!(SIG_CONTEXT[3][(0b0001_0000 | N_LEFT) as usize], 4);
+    }
 }

@@ -116,14 +116,17 @@ pub(crate) fn picture(src: &Source, streams: &[Option<&StreamState>], stop: u32)
             plane[y * w..y * w + lw].copy_from_slice(&pred[y * lw..(y + 1) * lw]);
         }
     }
+    let mut values = Vec::new();
     for st in streams.iter().flatten() {
         for (k, b) in st.bands.iter().enumerate() {
             let c = st.channel_of(k);
             let plane = &mut planes[c];
+            values.resize(b.band.w, 0);
             for y in 0..b.band.h {
                 let row = (b.band.y0 + y) * w + b.band.x0;
-                for x in 0..b.band.w {
-                    plane[row + x] = plane[row + x].wrapping_add(b.value(x, y));
+                b.row_values(y, &mut values);
+                for (v, &add) in plane[row..row + b.band.w].iter_mut().zip(&values) {
+                    *v = v.wrapping_add(add);
                 }
             }
         }
