@@ -492,7 +492,7 @@ impl StreamDecoder {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
         if k >= h.total_samples {
-            if let Some(d) = self.render_refined(&h, width, height, false) {
+            if let Some(d) = self.render_refined(&h, width, height, false, false) {
                 return Ok(if d.is_final {
                     Picture::Final(d)
                 } else {
@@ -552,7 +552,7 @@ impl StreamDecoder {
     pub fn render_thumbnail(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
         self.check_output_size(width, height)?;
         if let Some(h) = self.header.clone() {
-            if let Some(d) = self.render_refined(&h, width, height, true) {
+            if let Some(d) = self.render_refined(&h, width, height, true, false) {
                 return Ok(if d.is_final {
                     Picture::Final(d)
                 } else {
@@ -569,21 +569,23 @@ impl StreamDecoder {
         })
     }
 
-    /// The refinement's picture (or a thumbnail of it), once its header has arrived.
+    /// The refinement's picture (or a thumbnail of it), once its header has arrived; if
+    /// `last`, a one-shot decode's, which frees the refinement's state as it draws.
     fn render_refined(
         &mut self,
         h: &Header,
         width: u32,
         height: u32,
         thumbnail: bool,
+        last: bool,
     ) -> Option<DecodedImage> {
         let complete = self.is_complete();
         let icc = self.icc_profile().map(<[u8]>::to_vec);
         let r = self.refinement.as_mut()?;
         let pixels = if thumbnail {
-            r.render_thumbnail(width, height)
+            r.render_thumbnail(width, height, last)
         } else {
-            r.render(width, height)
+            r.render(width, height, last)
         };
         Some(DecodedImage {
             image: to_image(h.layout, width, height, pixels),
@@ -648,7 +650,7 @@ impl StreamDecoder {
         let h = self.header.clone().ok_or(Error::NeedMoreData)?;
         self.check_output_size(width, height)?;
         if k >= h.total_samples {
-            if let Some(d) = self.render_refined(&h, width, height, thumbnail) {
+            if let Some(d) = self.render_refined(&h, width, height, thumbnail, true) {
                 return Ok(d);
             }
         }

@@ -585,7 +585,10 @@ pub fn save_image_icc(
     }
     let format = output_format(path)?;
     let write = |img: &image::DynamicImage| -> (Vec<u8>, image::ImageResult<()>, bool) {
-        let mut buf = std::io::Cursor::new(Vec::new());
+        // Room for an uncompressed picture: no copies as it grows (pages not written to
+        // cost nothing).
+        let room = img.as_bytes().len() + 4096;
+        let mut buf = std::io::Cursor::new(Vec::with_capacity(room));
         let embedded = icc.and_then(|icc| match format {
             ImageFormat::Png => with_icc(img, png::PngEncoder::new(&mut buf), icc),
             ImageFormat::Jpeg => with_icc(img, jpeg::JpegEncoder::new(&mut buf), icc),

@@ -18,12 +18,18 @@
 use super::schedule::{block_order, Band, Orient, Pass, PassKind, BLOCK};
 use crate::coding::range::{Prob, RangeDecoder, RangeEncoder};
 
-const SIG: u8 = 1;
-const VISITED: u8 = 2;
-const REFINED: u8 = 4;
-const NEG: u8 = 8;
+/// A coefficient's flags: its state (SIG, VISITED, REFINED, NEG, ODD) in the low byte, the
+/// significance of its 8 neighbours (a pattern of N_LEFT, N_RIGHT, … bits) in the high byte,
+/// kept up to date as coefficients become significant.
+type Flags = u16;
+const SIG: Flags = 1;
+const VISITED: Flags = 2;
+const REFINED: Flags = 4;
+const NEG: Flags = 8;
 /// The parity of the bit-plane the coefficient was last coded at.
-const ODD: u8 = 16;
+const ODD: Flags = 16;
+/// Where the neighbour pattern starts.
+const NEIGHBOURS: u32 = 8;
 
 // Context layout within one (channel class, orientation) set.
 const CTX_SIG: usize = 0; // 9
@@ -129,9 +135,8 @@ pub(crate) struct BandState {
     pub class: ChannelClass,
     /// Row stride of `flags`: the band's width plus a border column on each side.
     pw: usize,
-    /// Per coefficient, with a one-coefficient border of zeros: SIG, VISITED, REFINED, NEG,
-    /// ODD.
-    flags: Vec<u8>,
+    /// Per coefficient, with a one-coefficient border (never significant): its [`Flags`].
+    flags: Vec<Flags>,
     /// The magnitude bits known so far, below 2^16 (row-major, the band's width)…
     low: Vec<u16>,
     /// … and from 2^16 up (empty until the first).
@@ -174,7 +179,7 @@ impl BandState {
     /// The reconstruction of a coefficient from its flags and magnitude bits, the band's
     /// current bit-plane being `current` (spec/refinement.md §7).
     #[inline(always)]
-    fn value_of(f: u8, m: u32, current: u8) -> i32 {
+    fn value_of(f: Flags, m: u32, current: u8) -> i32 {
         if f & SIG == 0 {
             return 0;
         }
@@ -224,19 +229,20 @@ impl BandState {
         Self::value_of(f, self.mag(y * self.band.w + x), self.current)
     }
 
-    /// Row `y`'s reconstructed values, into `out` (the band's width).
-    pub(crate) fn row_values(&self, y: usize, out: &mut [i32]) {
+    /// Adds row `y`'s reconstructed values to `out` (the band's width), wrapping.
+    pub(crate) fn add_row_values(&self, y: usize, out: &mut [i32]) {
         let w = self.band.w;
         let flags = &self.flags[self.fi(0, y)..self.fi(0, y) + w];
         let low = &self.low[y * w..(y + 1) * w];
         if self.high.is_empty() {
             for ((o, &f), &m) in out.iter_mut().zip(flags).zip(low) {
-                *o = Self::value_of(f, m as u32, self.current);
+                *o = o.wrapping_add(Self::value_of(f, m as u32, self.current));
             }
         } else {
             let high = &self.high[y * w..(y + 1) * w];
             for (((o, &f), &m), &h) in out.iter_mut().zip(flags).zip(low).zip(high) {
-                *o = Self::value_of(f, m as u32 | (h as u32) << 16, self.current);
+                let v = Self::value_of(f, m as u32 | (h as u32) << 16, self.current);
+                *o = o.wrapping_add(v);
             }
         }
     }
@@ -255,9 +261,14 @@ impl BandState {
     /// diagonal bits.
     #[inline(always)]
     fn pattern(&self, fi: usize) -> u8 {
+        (self.flags[fi] >> NEIGHBOURS) as u8
+    }
+
+    /// [`BandState::pattern`] from the neighbours' flags.
+    fn pattern_of_neighbours(&self, fi: usize) -> u8 {
         let f = &self.flags;
         let pw = self.pw;
-        let s = |i: usize| f[i] & SIG;
+        let s = |i: usize| (f[i] & SIG) as u8;
         s(fi - 1)
             | s(fi + 1) << 1
             | s(fi - pw) << 2
@@ -266,6 +277,34 @@ impl BandState {
             | s(fi - pw + 1) << 5
             | s(fi + pw - 1) << 6
             | s(fi + pw + 1) << 7
+    }
+
+    /// Marks coefficient `fi`, just made significant, in its neighbours' patterns.
+    #[inline(always)]
+    fn tell_neighbours(&mut self, fi: usize) {
+        let pw = self.pw;
+        let f = &mut self.flags;
+        // For the neighbour on the right, this coefficient is on its left; and so on.
+        f[fi + 1] |= (N_LEFT as Flags) << NEIGHBOURS;
+        f[fi - 1] |= (N_RIGHT as Flags) << NEIGHBOURS;
+        f[fi + pw] |= (N_UP as Flags) << NEIGHBOURS;
+        f[fi - pw] |= (N_DOWN as Flags) << NEIGHBOURS;
+        f[fi + pw + 1] |= 0x10 << NEIGHBOURS;
+        f[fi + pw - 1] |= 0x20 << NEIGHBOURS;
+        f[fi - pw + 1] |= 0x40 << NEIGHBOURS;
+        f[fi - pw - 1] |= 0x80 << NEIGHBOURS;
+    }
+
+    /// Makes the neighbour patterns of the band's coefficients within one of `(x, y)` agree
+    /// with their neighbours' flags again (after a unit was rolled back).
+    fn recount_neighbours(&mut self, x: usize, y: usize) {
+        for yy in y.saturating_sub(1)..(y + 2).min(self.band.h) {
+            for xx in x.saturating_sub(1)..(x + 2).min(self.band.w) {
+                let fi = self.fi(xx, yy);
+                let n = self.pattern_of_neighbours(fi) as Flags;
+                self.flags[fi] = (self.flags[fi] & 0xff) | n << NEIGHBOURS;
+            }
+        }
     }
 
     #[inline(always)]
@@ -440,7 +479,7 @@ pub(crate) struct StreamState {
 /// What a unit changed, to undo it.
 #[derive(Default)]
 struct Undo {
-    coefficients: Vec<(usize, usize, u8, u32)>,
+    coefficients: Vec<(usize, usize, Flags, u32)>,
     block: Option<(usize, bool)>,
     band_active: bool,
     current: u8,
@@ -555,6 +594,9 @@ impl StreamState {
                         b.flags[fi] = f;
                         b.set_mag(i, m);
                     }
+                    for &(_, i, _, _) in &undo.coefficients {
+                        b.recount_neighbours(i % b.band.w, i / b.band.w);
+                    }
                     if let Some((blk, a)) = undo.block {
                         b.block_active[blk] = a;
                     }
@@ -667,7 +709,7 @@ fn next_block(band: &BandState, cur: &mut Cursor) -> Step {
 
 /// The parity flag of bit-plane `p`.
 #[inline(always)]
-fn parity(p: u32) -> u8 {
+fn parity(p: u32) -> Flags {
     if p & 1 == 1 {
         ODD
     } else {
@@ -692,8 +734,9 @@ fn propagate<S: Symbols, T: Tally>(
     let orient = band.band.orient as usize;
     for y in ys..ye {
         let fi = band.fi(x, y);
-        if band.flags[fi] & SIG == 0 {
-            let n = band.pattern(fi);
+        let f = band.flags[fi];
+        if f & SIG == 0 {
+            let n = (f >> NEIGHBOURS) as u8;
             if n != 0 {
                 let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n as usize] as usize;
                 code_significance(band, sym, probs, tally, x, y, p, ctx, set)?;
@@ -763,10 +806,12 @@ fn clean<S: Symbols, T: Tally>(
     let orient = band.band.orient as usize;
     let mut y = ys;
     if ye - ys == 4 {
-        let quiet = (ys..ye).all(|yy| {
-            let fi = band.fi(x, yy);
-            band.flags[fi] & (SIG | VISITED) == 0 && band.pattern(fi) == 0
-        });
+        // No coefficient significant, visited or with a significant neighbour.
+        const BUSY: Flags = SIG | VISITED | 0xff << NEIGHBOURS;
+        let fi = band.fi(x, ys);
+        let pw = band.pw;
+        let f = &band.flags;
+        let quiet = (f[fi] | f[fi + pw] | f[fi + 2 * pw] | f[fi + 3 * pw]) & BUSY == 0;
         if quiet {
             let first = if S::ENCODES {
                 (ys..ye).position(|yy| {
@@ -847,6 +892,7 @@ fn make_significant<T: Tally>(
     let fi = band.fi(x, y);
     let i = y * band.band.w + x;
     band.flags[fi] = (band.flags[fi] & !ODD) | SIG | if neg { NEG } else { 0 } | parity(p);
+    band.tell_neighbours(fi);
     band.set_mag(i, 1 << p);
     let (bw, _) = band.band.blocks();
     band.block_active[(y / BLOCK) * bw + x / BLOCK] = true;

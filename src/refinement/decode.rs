@@ -2,7 +2,7 @@
 //! picture at any size (spec/reconstruction.md, *The refined picture*).
 
 use super::bitplane::StreamState;
-use super::picture::{picture, Source};
+use super::picture::{picture, picture_releasing, thumbnail, Source};
 use super::predict;
 use super::resample::resample;
 use super::schedule::key;
@@ -107,7 +107,7 @@ impl RefinementDecoder {
     /// Keeps only the streams a `width × height` thumbnail needs (the others' bytes are
     /// dropped as they arrive, and never decoded).
     pub(crate) fn keep_streams_for_thumbnail(&mut self, width: u32, height: u32) {
-        let (decoded, _) = self.thumbnail_levels(width, height);
+        let decoded = self.thumbnail_level(width, height);
         let keep = self.streams_for(decoded);
         for d in self.streams.iter_mut().skip(keep) {
             *d = None;
@@ -130,70 +130,80 @@ impl RefinementDecoder {
         (self.layout.levels - level.min(self.layout.levels)) as usize + 1
     }
 
-    /// A thumbnail's levels: the one whose bands it decodes (the deepest at least twice the
-    /// thumbnail's size), and the one it is drawn at (two finer, or the image size): the bands
-    /// between are taken as zero, and each thumbnail pixel averages the picture over its area.
-    fn thumbnail_levels(&self, width: u32, height: u32) -> (u32, u32) {
-        let decoded = self.level_at_least(2 * width as usize, 2 * height as usize);
-        (decoded, decoded.saturating_sub(2))
+    /// The level whose bands a thumbnail decodes (the finer bands are taken as zero): the
+    /// deepest whose low-low band is at least twice the thumbnail's size.
+    fn thumbnail_level(&self, width: u32, height: u32) -> u32 {
+        self.level_at_least(2 * width as usize, 2 * height as usize)
     }
 
-    /// Advances the first `n` streams over the bytes received and draws the picture of
-    /// transform level `stop` from them.
-    fn picture_from(&mut self, n: usize, stop: u32) -> Vec<u8> {
+    /// Advances the first `n` streams over the bytes received.
+    fn advance(&mut self, n: usize) {
         for (s, d) in self.streams.iter_mut().enumerate().take(n) {
             if let Some(d) = d {
                 d.advance(&self.bytes[s]);
             }
         }
-        let states: Vec<Option<&StreamState>> = self
-            .streams
-            .iter()
-            .enumerate()
-            .map(|(s, d)| d.as_ref().filter(|_| s < n).map(|d| &d.state))
-            .collect();
-        let src = Source {
-            width: self.layout.width,
-            height: self.layout.height,
-            channels: self.layout.channels,
-            kernel: self.layout.kernel,
-            levels: self.layout.levels,
-            frac: self.frac,
-            prediction: &self.prediction,
-        };
-        picture(&src, &states, stop)
     }
 
-    /// The picture `picture` of transform level `level`, resampled to `width × height`.
-    fn resampled(&self, picture: &[u8], level: u32, width: u32, height: u32) -> Vec<u8> {
-        let (pw, ph) = low_size(self.layout.width, self.layout.height, level);
-        resample(
-            picture,
-            pw,
-            ph,
-            self.layout.channels,
-            level,
-            (self.layout.width, self.layout.height),
-            width as usize,
-            height as usize,
-        )
+    /// What the picture is drawn from, but the streams.
+    fn source(&self) -> Source<'_> {
+        source(&self.layout, self.frac, &self.prediction)
+    }
+
+    /// The states of the first `n` streams (`None`: skipped).
+    fn states(&self, n: usize) -> Vec<Option<&StreamState>> {
+        let used = self.streams.iter().take(n);
+        used.map(|d| d.as_ref().map(|d| &d.state)).collect()
     }
 
     /// The picture at `width × height` from the bytes received so far (interleaved, the file's
     /// layout): the image-size picture, averaged over each output pixel (smaller) or
-    /// interpolated (larger). This is the spec's picture.
-    pub(crate) fn render(&mut self, width: u32, height: u32) -> Vec<u8> {
+    /// interpolated (larger). This is the spec's picture. If `last`, the decoder is spent:
+    /// its states are freed as the picture is made.
+    pub(crate) fn render(&mut self, width: u32, height: u32, last: bool) -> Vec<u8> {
         let all = self.layout.streams();
-        let pic = self.picture_from(all, 0);
-        self.resampled(&pic, 0, width, height)
+        self.advance(all);
+        let pic = if last {
+            let src = source(&self.layout, self.frac, &self.prediction);
+            let used = self.streams.iter_mut();
+            let mut states: Vec<_> = used.map(|d| d.as_mut().map(|d| &mut d.state)).collect();
+            picture_releasing(&src, &mut states, 0)
+        } else {
+            picture(&self.source(), &self.states(all), 0)
+        };
+        let (w, h) = (self.layout.width, self.layout.height);
+        if (width as usize, height as usize) == (w, h) {
+            return pic;
+        }
+        let c = self.layout.channels;
+        resample(&pic, w, h, c, 0, (w, h), width as usize, height as usize)
     }
 
     /// A thumbnail at `width × height`: about the same picture from the coarse streams only
-    /// (a 1/8-size thumbnail decodes 1/16 of the coefficients).
-    pub(crate) fn render_thumbnail(&mut self, width: u32, height: u32) -> Vec<u8> {
-        let (decoded, drawn) = self.thumbnail_levels(width, height);
-        let pic = self.picture_from(self.streams_for(decoded), drawn);
-        self.resampled(&pic, drawn, width, height)
+    /// (a 1/8-size thumbnail decodes 1/16 of the coefficients). Near the image's size, the
+    /// picture of [`RefinementDecoder::render`].
+    pub(crate) fn render_thumbnail(&mut self, width: u32, height: u32, last: bool) -> Vec<u8> {
+        let decoded = self.thumbnail_level(width, height);
+        if decoded == 0 {
+            return self.render(width, height, last);
+        }
+        let n = self.streams_for(decoded);
+        self.advance(n);
+        let size = (width as usize, height as usize);
+        thumbnail(&self.source(), &self.states(n), decoded, size)
+    }
+}
+
+/// What a picture of `layout` is drawn from, but the streams.
+fn source<'a>(layout: &Layout, frac: u32, prediction: &'a [Vec<i32>]) -> Source<'a> {
+    Source {
+        width: layout.width,
+        height: layout.height,
+        channels: layout.channels,
+        kernel: layout.kernel,
+        levels: layout.levels,
+        frac,
+        prediction,
     }
 }
 

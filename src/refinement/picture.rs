@@ -7,13 +7,8 @@
 //! little below the integer grid, where the 9/7 steps round).
 
 use super::bitplane::StreamState;
-use super::wavelet::{inverse, low_size, Kernel};
-
-/// Whether coded channel `c` of a layout with `channels` channels ranges over 0..=255 (and is
-/// centred), rather than −255..=255 (Co, Cg).
-fn centred(channels: usize, c: usize) -> bool {
-    !(channels >= 3 && (c == 1 || c == 2))
-}
+use super::resample::Axis;
+use super::wavelet::{inverse, low_size, synthesise_rows, Kernel};
 
 /// Pixels (interleaved, `channels` per pixel) → one plane per coded channel, times 2^frac.
 pub(crate) fn to_planes(pixels: &[u8], channels: usize, frac: u32) -> Vec<Vec<i32>> {
@@ -106,54 +101,161 @@ pub(crate) struct Source<'a> {
 /// decoded so far (`streams[s]` is `None` for a stream not decoded; a picture at level k
 /// needs streams 0..=levels − k).
 pub(crate) fn picture(src: &Source, streams: &[Option<&StreamState>], stop: u32) -> Vec<u8> {
-    let stop = stop.min(src.levels);
-    let (w, h) = (src.width, src.height);
-    let mut planes = vec![vec![0i32; w * h]; src.channels];
-    // The low-low band starts from its prediction.
-    let (lw, lh) = low_size(w, h, src.levels);
-    for (plane, pred) in planes.iter_mut().zip(src.prediction) {
-        for y in 0..lh {
-            plane[y * w..y * w + lw].copy_from_slice(&pred[y * lw..(y + 1) * lw]);
-        }
-    }
-    let mut values = Vec::new();
-    for st in streams.iter().flatten() {
-        for (k, b) in st.bands.iter().enumerate() {
-            let c = st.channel_of(k);
-            let plane = &mut planes[c];
-            values.resize(b.band.w, 0);
-            for y in 0..b.band.h {
-                let row = (b.band.y0 + y) * w + b.band.x0;
-                b.row_values(y, &mut values);
-                for (v, &add) in plane[row..row + b.band.w].iter_mut().zip(&values) {
-                    *v = v.wrapping_add(add);
+    draw(src, stop, |c, w, h| {
+        channel_plane(src, streams.iter().flatten().copied(), c, w, h)
+    })
+}
+
+/// [`picture`], freeing each channel's band states as soon as its plane is made (a one-shot
+/// decode's last step: the states and the planes are not all held at once).
+pub(crate) fn picture_releasing(
+    src: &Source,
+    streams: &mut [Option<&mut StreamState>],
+    stop: u32,
+) -> Vec<u8> {
+    draw(src, stop, |c, w, h| {
+        let plane = channel_plane(src, streams.iter().flatten().map(|s| &**s), c, w, h);
+        for st in streams.iter_mut().flatten() {
+            for k in 0..st.bands.len() {
+                if st.channel_of(k) == c {
+                    st.bands[k].release();
                 }
             }
         }
+        plane
+    })
+}
+
+/// Coded channel `c` before the inverse transform, `w × h` (the low-low band of level
+/// `stop`, which holds every band of the coarser levels): the prediction plus the bands.
+fn channel_plane<'a>(
+    src: &Source,
+    streams: impl Iterator<Item = &'a StreamState>,
+    c: usize,
+    w: usize,
+    h: usize,
+) -> Vec<i32> {
+    let mut plane = vec![0i32; w * h];
+    let (lw, lh) = low_size(src.width, src.height, src.levels);
+    let pred = &src.prediction[c];
+    for y in 0..lh {
+        plane[y * w..y * w + lw].copy_from_slice(&pred[y * lw..(y + 1) * lw]);
     }
-    let (pw, ph) = low_size(w, h, stop);
-    // The picture's values are 2^frac · gain(stop) times the pixels'.
-    let inverse_gain = low_gain_inverse(src.kernel, stop);
-    let shift = 16 + src.frac;
-    let round = 1i64 << (shift - 1);
-    for plane in &mut planes {
-        inverse(src.kernel, plane, w, h, src.levels, stop);
-    }
-    let mut out = vec![0u8; pw * ph * src.channels];
-    let mut coded = [0i32; 4];
-    for y in 0..ph {
-        for x in 0..pw {
-            for (c, plane) in planes.iter().enumerate() {
-                let v = plane[y * w + x] as i64;
-                // Divide by gain · 2^frac, rounding to nearest (halves up).
-                coded[c] = ((v * inverse_gain + round) >> shift) as i32;
+    for st in streams {
+        for (k, b) in st.bands.iter().enumerate() {
+            let band = &b.band;
+            if st.channel_of(k) != c || band.x0 + band.w > w || band.y0 + band.h > h {
+                continue;
             }
-            let o = (y * pw + x) * src.channels;
-            layout_values(&coded[..src.channels], &mut out[o..o + src.channels]);
+            for y in 0..band.h {
+                let row = (band.y0 + y) * w + band.x0;
+                b.add_row_values(y, &mut plane[row..row + band.w]);
+            }
         }
     }
-    let _ = centred;
+    plane
+}
+
+/// The picture at level `stop` from each channel's plane before the inverse transform
+/// (`plane(c, w, h)`, made one channel at a time).
+fn draw(
+    src: &Source,
+    stop: u32,
+    mut plane: impl FnMut(usize, usize, usize) -> Vec<i32>,
+) -> Vec<u8> {
+    let stop = stop.min(src.levels);
+    let (w, h) = low_size(src.width, src.height, stop);
+    let planes: Vec<Vec<i32>> = (0..src.channels)
+        .map(|c| {
+            let mut p = plane(c, w, h);
+            // The low-low band of level `stop` is an image of its own, of levels − stop levels.
+            inverse(src.kernel, &mut p, w, h, src.levels - stop, 0);
+            normalise(src, stop, &mut p);
+            p
+        })
+        .collect();
+    interleave(&planes, w * h)
+}
+
+/// A thumbnail of `tw × th` (informative): the picture with the bands finer than level
+/// `decoded` taken as zero, averaged over each thumbnail pixel (`Axis`). Those bands being
+/// zero, the rest of the inverse transform and the average are made one axis at a time: on
+/// the rows of the low-low band of level `decoded`, then on the columns of the result.
+pub(crate) fn thumbnail(
+    src: &Source,
+    streams: &[Option<&StreamState>],
+    decoded: u32,
+    (tw, th): (usize, usize),
+) -> Vec<u8> {
+    let (w, h) = low_size(src.width, src.height, decoded);
+    let ax = Axis::new(src.width, tw, src.width, 0);
+    let ay = Axis::new(src.height, th, src.height, 0);
+    let planes: Vec<Vec<i32>> = (0..src.channels)
+        .map(|c| {
+            let mut p = channel_plane(src, streams.iter().flatten().copied(), c, w, h);
+            inverse(src.kernel, &mut p, w, h, src.levels - decoded, 0);
+            let mut rows = vec![0; h * tw];
+            synthesise_rows(src.kernel, &p, w, (src.width, decoded), &ax, &mut rows);
+            let mut columns = vec![0; tw * th];
+            let t = transpose(&rows, tw);
+            synthesise_rows(src.kernel, &t, h, (src.height, decoded), &ay, &mut columns);
+            let mut p = transpose(&columns, th);
+            normalise(src, 0, &mut p);
+            p
+        })
+        .collect();
+    interleave(&planes, tw * th)
+}
+
+/// The transpose of `m`, rows of `w` values.
+fn transpose(m: &[i32], w: usize) -> Vec<i32> {
+    let h = m.len() / w;
+    let mut t = vec![0; m.len()];
+    for (y, row) in m.chunks_exact(w).enumerate() {
+        for (x, &v) in row.iter().enumerate() {
+            t[x * h + y] = v;
+        }
+    }
+    t
+}
+
+/// A plane of the picture of level `level` (2^frac · gain(level) times the pixels') divided
+/// by 2^frac · gain, rounding to nearest (halves up).
+fn normalise(src: &Source, level: u32, p: &mut [i32]) {
+    let inverse_gain = low_gain_inverse(src.kernel, level);
+    let shift = 16 + src.frac;
+    let round = 1i64 << (shift - 1);
+    if inverse_gain != 1 << 16 {
+        for v in p {
+            *v = ((*v as i64 * inverse_gain + round) >> shift) as i32;
+        }
+    } else if src.frac > 0 {
+        // The same in 32 bits: ⌊(v + 2^(f−1)) / 2^f⌋ = (v >> f) + bit f − 1 of v.
+        let f = src.frac;
+        for v in p {
+            *v = (*v >> f) + ((*v >> (f - 1)) & 1);
+        }
+    }
+}
+
+/// Coded channel planes of `n` values each → interleaved layout pixels.
+fn interleave(planes: &[Vec<i32>], n: usize) -> Vec<u8> {
+    let mut out = vec![0u8; n * planes.len()];
+    match planes.len() {
+        1 => to_layout::<1>(planes, &mut out),
+        2 => to_layout::<2>(planes, &mut out),
+        3 => to_layout::<3>(planes, &mut out),
+        _ => to_layout::<4>(planes, &mut out),
+    }
     out
+}
+
+/// Coded channel planes (centred, integer) → interleaved layout pixels of `N` channels.
+fn to_layout<const N: usize>(planes: &[Vec<i32>], out: &mut [u8]) {
+    for (i, px) in out.chunks_exact_mut(N).enumerate() {
+        let coded: [i32; N] = std::array::from_fn(|c| planes[c][i]);
+        layout_values(&coded, px);
+    }
 }
 
 #[cfg(test)]

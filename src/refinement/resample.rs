@@ -7,7 +7,7 @@
 
 /// Per output pixel along one axis: the source indices and integer weights (their sum is
 /// the pixel's divisor).
-struct Axis {
+pub(crate) struct Axis {
     taps: Vec<Vec<(usize, u64)>>,
 }
 
@@ -18,7 +18,7 @@ impl Axis {
     /// i·2^level. A smaller output (`dst < src`) weighs each sample by the overlap of its cell
     /// with the output pixel (a box filter); otherwise the output pixel's centre interpolates
     /// linearly between the two nearest samples' centres (clamped to the first and last).
-    fn new(src: usize, dst: usize, full: usize, level: u32) -> Axis {
+    pub(crate) fn new(src: usize, dst: usize, full: usize, level: u32) -> Axis {
         let half = 1u64 << level; // a cell is 2·half long in units of half a pixel
         if dst < src {
             // Coordinates in units of 1/(2·dst) pixel: output pixel j is [2j·full, 2(j+1)·full),
@@ -64,6 +64,21 @@ impl Axis {
             })
             .collect();
         Axis { taps }
+    }
+}
+
+impl Axis {
+    /// One line of values resampled: each output the weighted mean of its taps, rounded to
+    /// nearest.
+    pub(crate) fn line(&self, src: &[i32], out: &mut [i32]) {
+        for (o, taps) in out.iter_mut().zip(&self.taps) {
+            let (mut sum, mut total) = (0i64, 0i64);
+            for &(i, w) in taps {
+                sum += w as i64 * src[i] as i64;
+                total += w as i64;
+            }
+            *o = (2 * sum + total).div_euclid(2 * total) as i32;
+        }
     }
 }
 

@@ -64,20 +64,22 @@ fn steps(kernel: Kernel) -> &'static [(bool, Step)] {
 #[inline(always)]
 fn lift_1d(update: bool, step: Step, s: &mut [i32], d: &mut [i32], sign: i32) {
     let (nl, nh) = (s.len(), d.len());
+    let one =
+        |t: &mut i32, a: i32, b: i32| *t = t.wrapping_add(sign.wrapping_mul(step.delta(a, b)));
     if update {
         // s[i] ±= f(d[i − 1], d[i]), indices clamped to 0..nh.
-        s[0] = s[0].wrapping_add(sign.wrapping_mul(step.delta(d[0], d[0])));
-        for i in 1..nl {
-            let a = d[i - 1];
-            let b = d[i.min(nh - 1)];
-            s[i] = s[i].wrapping_add(sign.wrapping_mul(step.delta(a, b)));
+        one(&mut s[0], d[0], d[0]);
+        let m = nh.min(nl);
+        lift_row(step, &mut s[1..m], &d[..m - 1], &d[1..m], sign);
+        for i in m.max(1)..nl {
+            one(&mut s[i], d[i - 1], d[nh - 1]);
         }
     } else {
         // d[i] ±= f(s[i], s[i + 1]), indices clamped to 0..nl.
-        for i in 0..nh {
-            let a = s[i];
-            let b = s[(i + 1).min(nl - 1)];
-            d[i] = d[i].wrapping_add(sign.wrapping_mul(step.delta(a, b)));
+        let m = nh.min(nl - 1);
+        lift_row(step, &mut d[..m], &s[..m], &s[1..m + 1], sign);
+        for i in m..nh {
+            one(&mut d[i], s[i], s[nl - 1]);
         }
     }
 }
@@ -277,6 +279,30 @@ pub(crate) fn inverse(
         for y in 0..ch {
             inverse_row(kernel, &mut plane[y * w..y * w + cw], &mut tmp);
         }
+    }
+}
+
+/// Synthesises each row of `m` (`w` values each: a row of the low band of level `from` of
+/// a line `full` long) to the whole line with zero detail bands, and resamples it (`axis`)
+/// into `out` (`axis`'s output length per row).
+pub(crate) fn synthesise_rows(
+    kernel: Kernel,
+    m: &[i32],
+    w: usize,
+    (full, from): (usize, u32),
+    axis: &super::resample::Axis,
+    out: &mut [i32],
+) {
+    let mut line = vec![0i32; full];
+    let mut tmp = Vec::new();
+    let dw = out.len() / (m.len() / w).max(1);
+    for (row, o) in m.chunks_exact(w).zip(out.chunks_exact_mut(dw)) {
+        line[..w].copy_from_slice(row);
+        line[w..].fill(0);
+        for l in (0..from).rev() {
+            inverse_row(kernel, &mut line[..low_size(full, 1, l).0], &mut tmp);
+        }
+        axis.line(&line, o);
     }
 }
 
