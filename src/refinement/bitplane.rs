@@ -16,6 +16,7 @@
 //! (every significant coefficient is refined at every bit-plane).
 
 use super::schedule::{block_order, Band, Orient, Pass, PassKind, BLOCK};
+use super::written_zeros;
 use crate::coding::range::{Prob, RangeDecoder, RangeEncoder};
 
 /// A coefficient's flags: its state (SIG, VISITED, REFINED, NEG, ODD) in the low byte, the
@@ -160,14 +161,23 @@ impl BandState {
             band,
             class,
             pw,
-            flags: vec![0; pw * (band.h + 2)],
-            low: vec![0; band.len()],
+            flags: Vec::new(),
+            low: Vec::new(),
             high: Vec::new(),
             current: 0,
             block_active: vec![false; bw * bh],
             band_active: false,
             order: block_order(&band),
             truth,
+        }
+    }
+
+    /// Makes the coefficients' state (a band is allocated when its stream is first coded:
+    /// a decoder that skips a stream never holds its bands).
+    fn allocate(&mut self) {
+        if self.flags.is_empty() {
+            self.flags = written_zeros(self.pw * (self.band.h + 2));
+            self.low = written_zeros(self.band.len());
         }
     }
 
@@ -216,7 +226,7 @@ impl BandState {
         self.low[i] = m as u16;
         if m >> 16 != 0 || !self.high.is_empty() {
             if self.high.is_empty() {
-                self.high = vec![0; self.low.len()];
+                self.high = written_zeros(self.low.len());
             }
             self.high[i] = (m >> 16) as u16;
         }
@@ -229,20 +239,36 @@ impl BandState {
         Self::value_of(f, self.mag(y * self.band.w + x), self.current)
     }
 
-    /// Adds row `y`'s reconstructed values to `out` (the band's width), wrapping.
-    pub(crate) fn add_row_values(&self, y: usize, out: &mut [i32]) {
+    /// Row `y`'s reconstructed values into `out` (the band's width): added to it (wrapping)
+    /// if `add`, else written over it.
+    pub(crate) fn row_values(&self, y: usize, out: &mut [i32], add: bool) {
+        if add {
+            self.row_values_with::<true>(y, out)
+        } else {
+            self.row_values_with::<false>(y, out)
+        }
+    }
+
+    fn row_values_with<const ADD: bool>(&self, y: usize, out: &mut [i32]) {
+        let put = |o: &mut i32, v: i32| *o = if ADD { o.wrapping_add(v) } else { v };
+        if self.flags.is_empty() {
+            // Never coded: zeros.
+            return out.iter_mut().for_each(|o| put(o, 0));
+        }
         let w = self.band.w;
         let flags = &self.flags[self.fi(0, y)..self.fi(0, y) + w];
         let low = &self.low[y * w..(y + 1) * w];
         if self.high.is_empty() {
             for ((o, &f), &m) in out.iter_mut().zip(flags).zip(low) {
-                *o = o.wrapping_add(Self::value_of(f, m as u32, self.current));
+                put(o, Self::value_of(f, m as u32, self.current));
             }
         } else {
             let high = &self.high[y * w..(y + 1) * w];
             for (((o, &f), &m), &h) in out.iter_mut().zip(flags).zip(low).zip(high) {
-                let v = Self::value_of(f, m as u32 | (h as u32) << 16, self.current);
-                *o = o.wrapping_add(v);
+                put(
+                    o,
+                    Self::value_of(f, m as u32 | (h as u32) << 16, self.current),
+                );
             }
         }
     }
@@ -362,14 +388,24 @@ pub(crate) trait Symbols {
     /// Codes `bit` (encoder) or decodes one (decoder; `None` when the bytes so far do not
     /// decide it) with the probability `probs[ctx]`, which then adapts.
     fn code(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> Option<bool>;
-    /// Called before each unit (or block); whether it may run out of bytes, so must be coded
-    /// a unit at a time and journalled.
-    fn begin_unit(&mut self) -> bool {
-        false
+    /// Called before each unit (or block): how it is coded.
+    fn begin_unit(&mut self) -> Mode {
+        Mode::Block
     }
     /// Called when a unit ran out of bytes: puts back the coder and the probabilities it
     /// changed as they were at the unit's start.
     fn rollback(&mut self, _probs: &mut [Prob]) {}
+}
+
+/// How the next unit is coded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Mode {
+    /// With the rest of its block, unjournalled: the block cannot run out of bytes.
+    Block,
+    /// Alone, unjournalled: the unit cannot run out of bytes.
+    Unit,
+    /// Alone, journalled: it may run out of bytes, and then is rolled back.
+    Journal,
 }
 
 /// The encoder side: every bit is coded as given.
@@ -403,6 +439,11 @@ pub(crate) struct Decoding<'a> {
 /// room to spare: with more than this left, it cannot run out.
 const BLOCK_BYTES: usize = 8 * 1024;
 
+/// The same for one unit: at most 10 decisions (a stripe column's cleanup: a run, two for
+/// the position, a sign, then a significance and a sign for each of the other three), each
+/// shifting in at most 2 bytes (its probability is at least 1/4096).
+const UNIT_BYTES: usize = 64;
+
 impl<'a> Decoding<'a> {
     pub(crate) fn new(dec: RangeDecoder, bytes: &'a [u8]) -> Self {
         Decoding {
@@ -427,19 +468,24 @@ impl Symbols for Decoding<'_> {
     }
 
     #[inline(always)]
-    fn begin_unit(&mut self) -> bool {
-        self.careful = !self.dec.ready_for_fast(self.bytes, BLOCK_BYTES);
-        if self.careful {
+    fn begin_unit(&mut self) -> Mode {
+        let mode = if self.dec.ready_for_fast(self.bytes, BLOCK_BYTES) {
+            Mode::Block
+        } else if self.dec.ready_for_fast(self.bytes, UNIT_BYTES) {
+            Mode::Unit
+        } else {
             self.saved = self.dec;
             self.journal.clear();
-        }
-        self.careful
+            Mode::Journal
+        };
+        self.careful = mode == Mode::Journal;
+        mode
     }
 
     fn rollback(&mut self, probs: &mut [Prob]) {
         assert!(
             self.careful,
-            "a block ran out of bytes with {BLOCK_BYTES} to spare"
+            "a unit ran out of bytes with {UNIT_BYTES} to spare"
         );
         for &(ctx, p) in self.journal.iter().rev() {
             probs[ctx] = p;
@@ -563,18 +609,21 @@ impl StreamState {
         pass_done: &mut dyn FnMut(&mut S, &mut T, usize),
     ) {
         let mut undo = Undo::default();
+        if self.cursor.pass < limit.min(self.passes.len()) {
+            self.bands.iter_mut().for_each(BandState::allocate);
+        }
         while self.cursor.pass < limit.min(self.passes.len()) {
-            let careful = sym.begin_unit();
+            let mode = sym.begin_unit();
             let saved_cursor = self.cursor;
-            let done = if careful {
+            let done = if mode == Mode::Journal {
                 let b = &self.bands[self.targets[self.cursor.pass]];
                 undo.coefficients.clear();
                 undo.block = None;
                 undo.band_active = b.band_active;
                 undo.current = b.current;
-                self.step(sym, tally, Some(&mut undo))
+                self.step(sym, tally, true, Some(&mut undo))
             } else {
-                self.step(sym, tally, None)
+                self.step(sym, tally, mode == Mode::Unit, None)
             };
             match done {
                 Some(Step::More) => {}
@@ -609,12 +658,13 @@ impl StreamState {
         }
     }
 
-    /// Codes the next unit of the current pass, or with no journal (`undo` is `None`: bytes
-    /// to spare) the rest of the current block.
+    /// Codes the next unit of the current pass if `one`, else the rest of the current block;
+    /// journalled in `undo` if given.
     fn step<S: Symbols, T: Tally>(
         &mut self,
         sym: &mut S,
         tally: &mut T,
+        one: bool,
         mut undo: Option<&mut Undo>,
     ) -> Option<Step> {
         let pass = self.passes[self.cursor.pass];
@@ -652,7 +702,7 @@ impl StreamState {
                         return Some(next_block(band, cur));
                     }
                     cur.block_open = true;
-                    if undo.is_some() {
+                    if one {
                         return Some(Step::More);
                     }
                 }
@@ -667,9 +717,8 @@ impl StreamState {
         if let Some(u) = undo.as_deref_mut() {
             u.block = Some((blk, band.block_active[blk]));
         }
+        let (mut stripe, mut x) = (cur.column / cols, x0 + cur.column % cols);
         loop {
-            let stripe = cur.column / cols;
-            let x = x0 + cur.column % cols;
             let ys = y0 + 4 * stripe;
             let ye = (ys + 4).min(y0 + rows);
             if let Some(u) = undo.as_deref_mut() {
@@ -688,8 +737,12 @@ impl StreamState {
             if cur.column == columns {
                 return Some(next_block(band, cur));
             }
-            if undo.is_some() {
+            if one {
                 return Some(Step::More);
+            }
+            x += 1;
+            if x == x0 + cols {
+                (stripe, x) = (stripe + 1, x0);
             }
         }
     }

@@ -9,6 +9,7 @@ use super::schedule::key;
 use super::wavelet::low_size;
 use super::{channel_classes, Layout, StreamDecoder};
 use crate::container::{PassLimit, RefinementHeader};
+use rayon::prelude::*;
 
 /// A refinement being decoded.
 #[derive(Clone, Debug)]
@@ -137,12 +138,11 @@ impl RefinementDecoder {
     }
 
     /// Advances the first `n` streams over the bytes received.
+    /// The streams are independent: they are decoded in parallel.
     fn advance(&mut self, n: usize) {
-        for (s, d) in self.streams.iter_mut().enumerate().take(n) {
-            if let Some(d) = d {
-                d.advance(&self.bytes[s]);
-            }
-        }
+        let n = n.min(self.streams.len());
+        (self.streams[..n].par_iter_mut().zip(&self.bytes[..n]))
+            .for_each(|(d, bytes)| d.iter_mut().for_each(|d| d.advance(bytes)));
     }
 
     /// What the picture is drawn from, but the streams.

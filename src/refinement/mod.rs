@@ -99,6 +99,17 @@ impl Layout {
     }
 }
 
+/// `n` zeros, written now. The pages of a zeroed allocation map to the shared zero page
+/// when first read and are copied when first written: two faults per page, and from the
+/// second thread on, each copy flushes the TLB of every core. Buffers that are read before
+/// they are written (coefficient states, planes that bands are added to) start here.
+pub(crate) fn written_zeros<T: Copy + Default>(n: usize) -> Vec<T> {
+    let mut v = Vec::with_capacity(n);
+    // Not a constant zero, so not made a zeroed allocation again.
+    v.resize(n, std::hint::black_box(T::default()));
+    v
+}
+
 /// The number of bit-planes that hold every value of `plane`.
 pub(crate) fn bitplanes(plane: &[i32]) -> u8 {
     let max = plane.iter().map(|v| v.unsigned_abs()).max().unwrap_or(0);

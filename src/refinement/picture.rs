@@ -6,9 +6,12 @@
 //! every value is then multiplied by 2^F, F the file's fraction bits (lossy files code a
 //! little below the integer grid, where the 9/7 steps round).
 
-use super::bitplane::StreamState;
+use super::bitplane::{BandState, StreamState};
 use super::resample::Axis;
+use super::schedule::Orient;
 use super::wavelet::{inverse, low_size, synthesise_rows, Kernel};
+use rayon::prelude::*;
+use std::borrow::Borrow;
 
 /// Pixels (interleaved, `channels` per pixel) → one plane per coded channel, times 2^frac.
 pub(crate) fn to_planes(pixels: &[u8], channels: usize, frac: u32) -> Vec<Vec<i32>> {
@@ -101,37 +104,50 @@ pub(crate) struct Source<'a> {
 /// decoded so far (`streams[s]` is `None` for a stream not decoded; a picture at level k
 /// needs streams 0..=levels − k).
 pub(crate) fn picture(src: &Source, streams: &[Option<&StreamState>], stop: u32) -> Vec<u8> {
-    draw(src, stop, |c, w, h| {
-        channel_plane(src, streams.iter().flatten().copied(), c, w, h)
-    })
+    draw(src, stop, bands_by_channel(src, streams))
 }
 
-/// [`picture`], freeing each channel's band states as soon as its plane is made (a one-shot
-/// decode's last step: the states and the planes are not all held at once).
+/// [`picture`], taking the band states out of the streams and freeing each channel's as
+/// soon as its plane is made (a one-shot decode's last step: the states and the planes are
+/// not all held at once).
 pub(crate) fn picture_releasing(
     src: &Source,
     streams: &mut [Option<&mut StreamState>],
     stop: u32,
 ) -> Vec<u8> {
-    draw(src, stop, |c, w, h| {
-        let plane = channel_plane(src, streams.iter().flatten().map(|s| &**s), c, w, h);
-        for st in streams.iter_mut().flatten() {
-            for k in 0..st.bands.len() {
-                if st.channel_of(k) == c {
-                    st.bands[k].release();
-                }
-            }
+    let mut bands: Vec<Vec<BandState>> = (0..src.channels).map(|_| Vec::new()).collect();
+    for st in streams.iter_mut().flatten() {
+        let channels: Vec<usize> = (0..st.bands.len()).map(|k| st.channel_of(k)).collect();
+        for (b, c) in std::mem::take(&mut st.bands).into_iter().zip(channels) {
+            bands[c].push(b);
         }
-        plane
-    })
+    }
+    draw(src, stop, bands)
+}
+
+/// Each channel's bands in `streams`.
+fn bands_by_channel<'a>(
+    src: &Source,
+    streams: &[Option<&'a StreamState>],
+) -> Vec<Vec<&'a BandState>> {
+    let mut bands = vec![Vec::new(); src.channels];
+    for st in streams.iter().flatten() {
+        for (k, b) in st.bands.iter().enumerate() {
+            bands[st.channel_of(k)].push(b);
+        }
+    }
+    bands
 }
 
 /// Coded channel `c` before the inverse transform, `w × h` (the low-low band of level
-/// `stop`, which holds every band of the coarser levels): the prediction plus the bands.
-fn channel_plane<'a>(
+/// `stop`, which holds every band of the coarser levels): the prediction plus `bands`, the
+/// channel's (those outside the region are left out), each dropped once taken. The plane
+/// is written as the bands are taken (the low-low band added to the prediction, the others
+/// written in place), so that its memory grows as theirs is freed.
+fn channel_plane<B: Borrow<BandState>>(
     src: &Source,
-    streams: impl Iterator<Item = &'a StreamState>,
     c: usize,
+    bands: Vec<B>,
     w: usize,
     h: usize,
 ) -> Vec<i32> {
@@ -141,33 +157,28 @@ fn channel_plane<'a>(
     for y in 0..lh {
         plane[y * w..y * w + lw].copy_from_slice(&pred[y * lw..(y + 1) * lw]);
     }
-    for st in streams {
-        for (k, b) in st.bands.iter().enumerate() {
-            let band = &b.band;
-            if st.channel_of(k) != c || band.x0 + band.w > w || band.y0 + band.h > h {
-                continue;
-            }
-            for y in 0..band.h {
-                let row = (band.y0 + y) * w + band.x0;
-                b.add_row_values(y, &mut plane[row..row + band.w]);
-            }
+    for b in bands {
+        let b = b.borrow();
+        let band = &b.band;
+        if band.x0 + band.w > w || band.y0 + band.h > h {
+            continue;
+        }
+        let add = band.orient == Orient::LowLow;
+        for y in 0..band.h {
+            let row = (band.y0 + y) * w + band.x0;
+            b.row_values(y, &mut plane[row..row + band.w], add);
         }
     }
     plane
 }
 
-/// The picture at level `stop` from each channel's plane before the inverse transform
-/// (`plane(c, w, h)`, made one channel at a time).
-fn draw(
-    src: &Source,
-    stop: u32,
-    mut plane: impl FnMut(usize, usize, usize) -> Vec<i32>,
-) -> Vec<u8> {
+/// The picture at level `stop` from each channel's bands, the channels in parallel.
+fn draw<B: Borrow<BandState> + Send>(src: &Source, stop: u32, bands: Vec<Vec<B>>) -> Vec<u8> {
     let stop = stop.min(src.levels);
     let (w, h) = low_size(src.width, src.height, stop);
-    let planes: Vec<Vec<i32>> = (0..src.channels)
-        .map(|c| {
-            let mut p = plane(c, w, h);
+    let planes: Vec<Vec<i32>> = (bands.into_par_iter().enumerate())
+        .map(|(c, bands)| {
+            let mut p = channel_plane(src, c, bands, w, h);
             // The low-low band of level `stop` is an image of its own, of levels − stop levels.
             inverse(src.kernel, &mut p, w, h, src.levels - stop, 0);
             normalise(src, stop, &mut p);
@@ -190,9 +201,9 @@ pub(crate) fn thumbnail(
     let (w, h) = low_size(src.width, src.height, decoded);
     let ax = Axis::new(src.width, tw, src.width, 0);
     let ay = Axis::new(src.height, th, src.height, 0);
-    let planes: Vec<Vec<i32>> = (0..src.channels)
-        .map(|c| {
-            let mut p = channel_plane(src, streams.iter().flatten().copied(), c, w, h);
+    let planes: Vec<Vec<i32>> = (bands_by_channel(src, streams).into_par_iter().enumerate())
+        .map(|(c, bands)| {
+            let mut p = channel_plane(src, c, bands, w, h);
             inverse(src.kernel, &mut p, w, h, src.levels - decoded, 0);
             let mut rows = vec![0; h * tw];
             synthesise_rows(src.kernel, &p, w, (src.width, decoded), &ax, &mut rows);
@@ -240,22 +251,20 @@ fn normalise(src: &Source, level: u32, p: &mut [i32]) {
 
 /// Coded channel planes of `n` values each → interleaved layout pixels.
 fn interleave(planes: &[Vec<i32>], n: usize) -> Vec<u8> {
+    fn pixels<const N: usize>(planes: &[Vec<i32>], out: &mut [u8]) {
+        for (i, px) in out.chunks_exact_mut(N).enumerate() {
+            let coded: [i32; N] = std::array::from_fn(|c| planes[c][i]);
+            layout_values(&coded, px);
+        }
+    }
     let mut out = vec![0u8; n * planes.len()];
     match planes.len() {
-        1 => to_layout::<1>(planes, &mut out),
-        2 => to_layout::<2>(planes, &mut out),
-        3 => to_layout::<3>(planes, &mut out),
-        _ => to_layout::<4>(planes, &mut out),
+        1 => pixels::<1>(planes, &mut out),
+        2 => pixels::<2>(planes, &mut out),
+        3 => pixels::<3>(planes, &mut out),
+        _ => pixels::<4>(planes, &mut out),
     }
     out
-}
-
-/// Coded channel planes (centred, integer) → interleaved layout pixels of `N` channels.
-fn to_layout<const N: usize>(planes: &[Vec<i32>], out: &mut [u8]) {
-    for (i, px) in out.chunks_exact_mut(N).enumerate() {
-        let coded: [i32; N] = std::array::from_fn(|c| planes[c][i]);
-        layout_values(&coded, px);
-    }
 }
 
 #[cfg(test)]

@@ -84,24 +84,29 @@ fn lift_1d(update: bool, step: Step, s: &mut [i32], d: &mut [i32], sign: i32) {
     }
 }
 
-/// `target[k] ±= f(a[k], b[k])` for one step, over rows of a strip. Values whose sums stay
-/// within ±2^18 (every file an encoder writes, but for the low band of very deep transforms)
-/// take a 32-bit path the compiler vectorises; the others the exact 64-bit one.
+/// `target[k] ±= f(a[k], b[k])` for one step, over rows of a strip. Rows whose values and
+/// sums stay within ±2^18 (every file an encoder writes, but for the low band of very deep
+/// transforms) are done in 32 bits, which the compiler vectorises; for the others that is
+/// undone and the exact 64-bit step taken.
 #[inline(always)]
 fn lift_row(step: Step, target: &mut [i32], a: &[i32], b: &[i32], sign: i32) {
     if let Step::Fixed(c) = step {
-        const SMALL: u32 = 1 << 18;
-        let mut big = false;
-        for (&x, &y) in a.iter().zip(b) {
-            big |= x.wrapping_add(y).unsigned_abs() >= SMALL || x.unsigned_abs() >= SMALL;
+        // |c| < 2^13, so c·(a + b) + 2048 stays within 32 bits when |a + b| ≤ 2^18.
+        let fast = |x: i32, y: i32| {
+            sign.wrapping_mul(c.wrapping_mul(x.wrapping_add(y)).wrapping_add(2048) >> 12)
+        };
+        let mut bits = 0u32;
+        for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
+            let s = x.wrapping_add(y);
+            // At least |s| − 1 and |x| − 1: under 2^18 if both are at most 2^18.
+            bits |= (s ^ (s >> 31)) as u32 | (x ^ (x >> 31)) as u32;
+            *t = t.wrapping_add(fast(x, y));
         }
-        if !big {
-            // |c·(a + b)| < 2^13·2^18: no overflow in 32 bits.
-            for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
-                let d = (c * (x + y) + 2048) >> 12;
-                *t = t.wrapping_add(sign * d);
-            }
+        if bits < 1 << 18 {
             return;
+        }
+        for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
+            *t = t.wrapping_sub(fast(x, y));
         }
     }
     for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
