@@ -218,6 +218,7 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
     }
     let source = SourceImage::new(&pixels, width, height, channels)?;
     let levels = levels::code(&source, &seq, &header, opts.colour)?;
+    drop(source);
     let mut w = ContainerWriter::new(writer, &header)?;
     for (k, payload) in levels.payloads.iter().enumerate() {
         w.write_level(payload)?;
@@ -250,7 +251,7 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             frac,
             levels_of_transform,
         );
-        let coded = refine::encode(&t, &levels.fixed, &levels.decoded, goal, FIRST_LAYER);
+        let coded = refine::encode(t, &levels.fixed, &levels.decoded, goal, FIRST_LAYER);
         for layer in &coded.layers {
             let segs: Vec<&[u8]> = layer.iter().map(Vec::as_slice).collect();
             w.write_layer(&coded.header, &segs)?;

@@ -7,6 +7,7 @@ use super::schedule::band_weight;
 use super::wavelet::{forward, low_size, Kernel};
 use super::{bitplanes, channel_classes, encode_stream, predict, CodedStream, Layout};
 use crate::container::{PassLimit, RefinementHeader};
+use rayon::prelude::*;
 
 /// What the refinement should reach.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -126,9 +127,7 @@ pub(crate) fn transform(
 ) -> Transformed {
     let (w, h) = (width as usize, height as usize);
     let mut planes = to_planes(pixels, channels, frac);
-    for plane in &mut planes {
-        forward(kernel, plane, w, h, levels);
-    }
+    (planes.par_iter_mut()).for_each(|plane| forward(kernel, plane, w, h, levels));
     Transformed {
         width: w,
         height: h,
@@ -158,9 +157,14 @@ impl Transformed {
 
     /// The planes less the prediction, and their layout.
     fn residual(&self, prediction: &[Vec<i32>]) -> (Vec<Vec<i32>>, Layout) {
+        self.clone().into_residual(prediction)
+    }
+
+    /// [`Transformed::residual`], in place.
+    fn into_residual(self, prediction: &[Vec<i32>]) -> (Vec<Vec<i32>>, Layout) {
         let (w, h) = (self.width, self.height);
         let (lw, lh) = low_size(w, h, self.levels);
-        let mut planes = self.planes.clone();
+        let mut planes = self.planes;
         for (plane, pred) in planes.iter_mut().zip(prediction) {
             for y in 0..lh {
                 for (v, p) in plane[y * w..y * w + lw].iter_mut().zip(&pred[y * lw..]) {
@@ -248,32 +252,32 @@ impl Early<'_> {
 /// Codes the refinement of a picture over levels whose samples have fixed positions
 /// `positions` and decoded colours `colours`.
 pub(crate) fn encode(
-    t: &Transformed,
+    t: Transformed,
     positions: &[[i64; 2]],
     colours: &[u8],
     goal: Goal,
     first_layer: usize,
 ) -> Encoded {
     let prediction = t.prediction(positions, colours);
-    let (planes, layout) = t.residual(&prediction);
     let (kernel, frac, levels) = (t.kernel, t.frac, t.levels);
+    let (planes, layout) = t.into_residual(&prediction);
     let all: Vec<usize> = layout.passes().iter().map(Vec::len).collect();
     let (limits, limit) = match goal {
         Goal::Key(k) => (pass_limits(&layout, &PassLimit::Key(k)), PassLimit::Key(k)),
         Goal::Lossless | Goal::Bytes(_) => (all.clone(), PassLimit::Counts(vec![])),
     };
-    let code = |limits: &[usize]| -> Vec<CodedStream> {
-        layout
-            .stream_states(Some(&planes))
-            .into_iter()
-            .zip(limits)
-            .map(|(mut st, &n)| {
-                let weights = pass_weights(&layout, frac, &st.passes);
-                encode_stream(&mut st, n, &weights)
-            })
-            .collect()
-    };
-    let mut streams = code(&limits);
+    // The states copy their bands' coefficients: the planes go. The streams are coded in
+    // parallel, each state going once its stream is coded, the largest (the finest level's)
+    // first.
+    let states = layout.stream_states(Some(&planes));
+    drop(planes);
+    let mut streams: Vec<CodedStream> = (states.into_par_iter().zip(&limits).rev())
+        .map(|(mut st, &n)| {
+            let weights = pass_weights(&layout, frac, &st.passes);
+            encode_stream(&mut st, n, &weights)
+        })
+        .collect();
+    streams.reverse();
     let mut header = RefinementHeader {
         wavelet: kernel,
         fraction_bits: frac as u8,

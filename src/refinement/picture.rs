@@ -16,7 +16,7 @@ use std::borrow::Borrow;
 /// Pixels (interleaved, `channels` per pixel) → one plane per coded channel, times 2^frac.
 pub(crate) fn to_planes(pixels: &[u8], channels: usize, frac: u32) -> Vec<Vec<i32>> {
     let n = pixels.len() / channels;
-    let mut planes = vec![Vec::with_capacity(n); channels];
+    let mut planes: Vec<Vec<i32>> = (0..channels).map(|_| Vec::with_capacity(n)).collect();
     for px in pixels.chunks_exact(channels) {
         let coded = coded_channels(px);
         for (c, plane) in planes.iter_mut().enumerate() {
