@@ -187,6 +187,12 @@ impl RefinementDecoder {
         if decoded == 0 {
             return self.render(width, height, last);
         }
+        // Streams with no bytes yet hold zero bands: the bands from the first of them on are
+        // synthesised one axis at a time, like those finer than `decoded` (the first preview
+        // of a cut file does not run the whole inverse transform on zeros).
+        let n = self.streams_for(decoded);
+        let coded = (self.bytes[..n].iter().rposition(|b| !b.is_empty())).map_or(1, |s| s + 1);
+        let decoded = decoded.max(self.layout.levels + 1 - coded as u32);
         let n = self.streams_for(decoded);
         self.advance(n);
         let size = (width as usize, height as usize);
