@@ -583,7 +583,9 @@ pub fn roundtrip(data: &[u8]) {
         let got = d.image.as_bytes();
         match target {
             Target::Lossless => assert!(got == &pixels[..], "lossless decodes to other pixels"),
-            Target::Quality(q) if constant && q >= 50 => assert!(
+            // Levels of 6 bits or fewer are already 2 or more off, and a quality codes only
+            // the passes its threshold pays for: the check holds for finer levels.
+            Target::Quality(q) if constant && q >= 50 && bits >= 7 => assert!(
                 got.iter()
                     .zip(pixels.iter())
                     .all(|(&a, &b)| a.abs_diff(b) <= 1),

@@ -188,15 +188,22 @@ def spread_order(bw, bh):
 # refinement.md §4: the prediction of the low-low band
 # ---------------------------------------------------------------------------
 
-G97 = [65536, 99131, 149946, 226810, 343076, 518940, 784955, 1187333, 1795973, 2716611,
-       4109177, 6215590, 9401775, 14221236, 21511211, 32538112]
+GAIN97 = [65536, 80602, 99131, 121919, 149946, 184416, 226810, 278950, 343076, 421943,
+          518940, 638236, 784955, 965403, 1187333, 1460280, 1795973, 2208837, 2716611,
+          3341113, 4109177, 5053807, 6215590, 7644448, 9401775, 11563082, 14221236,
+          17490455, 21511211, 26456269, 32538112]
+
+
+def splits(W, H, L):
+    """The one-dimensional splits L levels make: a side shorter than 2 is not split."""
+    return sum((w >= 2) + (h >= 2) for (w, h) in region_sizes(W, H, L)[:L])
 
 
 def ll_prediction(h, ref, values, positions, wL, hL):
     """pred[c][j][i] for LL coefficient (i, j) in coded channel c (§4). values: each
     sample's centred coded-channel values; positions: its (X, Y) in 1/256 px."""
     L, F = ref.L, ref.F
-    G = 65536 if ref.wavelet == 0 else G97[L]
+    G = 65536 if ref.wavelet == 0 else GAIN97[splits(h.W, h.H, L)]
     nc = len(CODED[h.layout])
     pred = [[[0] * wL for _ in range(hL)] for _ in range(nc)]
     for j in range(hL):

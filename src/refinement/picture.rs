@@ -71,18 +71,20 @@ fn layout_values(coded: &[i32], out: &mut [u8]) {
     }
 }
 
-/// The inverse of the gain of the low-low band of k levels of the integer 9/7 on a
-/// constant, in 16.16 fixed point, for k = 0..=15: round(2^16 / g^(2k)) with
-/// g = 1.2298828545 the gain of the four steps (with their rounded weights) on a constant.
-pub(crate) const LOW_GAIN_97_INVERSE: [i64; 16] = [
-    65536, 43326, 28643, 18936, 12519, 8276, 5472, 3617, 2391, 1581, 1045, 691, 457, 302, 200, 132,
+/// The inverse of the gain on a constant of n one-dimensional splits of the integer 9/7,
+/// 16.16 fixed point, for n = 0..=30: round(2^16 / g^n) with g = 1.2298828545 the gain of the
+/// four steps (with their rounded weights) on a constant.
+pub(crate) const LOW_GAIN_97_INVERSE: [i64; 31] = [
+    65536, 53286, 43326, 35228, 28643, 23290, 18936, 15397, 12519, 10179, 8276, 6729, 5472, 4449,
+    3617, 2941, 2391, 1944, 1581, 1285, 1045, 850, 691, 562, 457, 371, 302, 246, 200, 162, 132,
 ];
 
-/// `LOW_GAIN_97_INVERSE` for `kernel` (the 5/3 keeps a constant as it is).
-pub(crate) fn low_gain_inverse(kernel: Kernel, levels: u32) -> i64 {
+/// `LOW_GAIN_97_INVERSE` for `kernel` and the low-low band of `levels` levels of a `w × h`
+/// plane (the 5/3 keeps a constant as it is).
+pub(crate) fn low_gain_inverse(kernel: Kernel, w: usize, h: usize, levels: u32) -> i64 {
     match kernel {
         Kernel::Reversible53 => 1 << 16,
-        Kernel::Integer97 => LOW_GAIN_97_INVERSE[levels as usize],
+        Kernel::Integer97 => LOW_GAIN_97_INVERSE[super::predict::splits(w, h, levels) as usize],
     }
 }
 
@@ -233,7 +235,7 @@ fn transpose(m: &[i32], w: usize) -> Vec<i32> {
 /// A plane of the picture of level `level` (2^frac · gain(level) times the pixels') divided
 /// by 2^frac · gain, rounding to nearest (halves up).
 fn normalise(src: &Source, level: u32, p: &mut [i32]) {
-    let inverse_gain = low_gain_inverse(src.kernel, level);
+    let inverse_gain = low_gain_inverse(src.kernel, src.width, src.height, level);
     let shift = 16 + src.frac;
     let round = 1i64 << (shift - 1);
     if inverse_gain != 1 << 16 {
@@ -296,7 +298,7 @@ mod tests {
             let mut p = vec![1 << 12; n * n];
             super::super::wavelet::forward(Kernel::Integer97, &mut p, n, n, levels);
             let got = p[0] as f64 / 4096.0;
-            let want = 65536.0 / LOW_GAIN_97_INVERSE[levels as usize] as f64;
+            let want = 65536.0 / LOW_GAIN_97_INVERSE[2 * levels as usize] as f64;
             assert!((got / want - 1.0).abs() < 4e-3, "{levels}: {got} vs {want}");
         }
     }

@@ -12,18 +12,30 @@ use crate::coding::predictive::{weighted_mean, weights, NEIGHBOURS, POS_ONE};
 use super::picture::coded_channels;
 use super::wavelet::{low_size, Kernel};
 
-/// The gain of the low-low band of k levels of the integer 9/7 on a constant, 16.16 fixed
-/// point, for k = 0..=15: round(2^16 · g^(2k)), g = 1.2298828545 (see
+/// The gain on a constant of n one-dimensional splits of the integer 9/7, 16.16 fixed point,
+/// for n = 0..=30: round(2^16 · g^n), g = 1.2298828545 (see
 /// [`super::picture::LOW_GAIN_97_INVERSE`]).
-const LOW_GAIN_97: [i64; 16] = [
-    65536, 99131, 149946, 226810, 343076, 518940, 784955, 1187333, 1795973, 2716611, 4109177,
-    6215590, 9401775, 14221236, 21511211, 32538112,
+const GAIN_97: [i64; 31] = [
+    65536, 80602, 99131, 121919, 149946, 184416, 226810, 278950, 343076, 421943, 518940, 638236,
+    784955, 965403, 1187333, 1460280, 1795973, 2208837, 2716611, 3341113, 4109177, 5053807,
+    6215590, 7644448, 9401775, 11563082, 14221236, 17490455, 21511211, 26456269, 32538112,
 ];
 
-fn low_gain(kernel: Kernel, levels: u32) -> i64 {
+/// The one-dimensional splits `levels` levels make of a `w × h` plane: a side of 1 is left
+/// as it is (a line shorter than 2 has no high half), so it adds no gain.
+pub(crate) fn splits(w: usize, h: usize, levels: u32) -> u32 {
+    (0..levels)
+        .map(|l| {
+            let (cw, ch) = low_size(w, h, l);
+            (cw >= 2) as u32 + (ch >= 2) as u32
+        })
+        .sum()
+}
+
+fn low_gain(kernel: Kernel, w: usize, h: usize, levels: u32) -> i64 {
     match kernel {
         Kernel::Reversible53 => 1 << 16,
-        Kernel::Integer97 => LOW_GAIN_97[levels as usize],
+        Kernel::Integer97 => GAIN_97[splits(w, h, levels) as usize],
     }
 }
 
@@ -148,7 +160,7 @@ pub(crate) fn low_band(
     let mut out = vec![Vec::with_capacity(lw * lh); channels];
     let values: Vec<[i32; 4]> = colours.chunks_exact(channels).map(coded_channels).collect();
     let grid = Grid::new(positions, width as i64 * POS_ONE, height as i64 * POS_ONE);
-    let gain = low_gain(kernel, levels);
+    let gain = low_gain(kernel, width, height, levels);
     let step = (1i64 << levels) * POS_ONE;
     for j in 0..lh as i64 {
         for i in 0..lw as i64 {
