@@ -500,6 +500,31 @@ fn frames_stop_at_the_byte_budget() {
     assert!(names.iter().all(|n| n.contains("preview")), "{names:?}");
 }
 
+/// `decode --frames` and `preview` make a picture where each level and each refinement layer
+/// ends: as many as the file has level and `R` chunks.
+#[test]
+fn frames_at_every_level_and_layer() {
+    let file = rocket_qcs("frames-layers.qcs");
+    let ins = qcs::container::inspect(&std::fs::read(&file).expect("read"));
+    let parts = ins.chunks.iter();
+    let parts = parts
+        .filter(|c| c.level.is_some() || c.layer.is_some())
+        .count();
+    assert!(ins.chunks.iter().filter(|c| c.layer.is_some()).count() > 2);
+    let dir = scratch("frames-layers");
+    let ok = run(qcs()
+        .args(["-q", "decode"])
+        .arg(&file)
+        .arg("--frames")
+        .arg(&dir));
+    assert!(ok.status.success(), "{ok:?}");
+    assert_eq!(std::fs::read_dir(&dir).expect("frames").count(), parts);
+    let gif = scratch("frames-layers.gif");
+    let ok = run(qcs().args(["-q", "preview"]).arg(&file).arg(&gif));
+    assert!(ok.status.success(), "{ok:?}");
+    assert_eq!(gif_frames(&gif), parts);
+}
+
 /// A camera's picture: a 24 × 16 PNG, left half red and right half blue, whose Exif says
 /// "rotate 90° clockwise" to be upright, with an ICC profile that is not sRGB.
 fn camera_png(name: &str, icc: &[u8]) -> PathBuf {

@@ -1,4 +1,4 @@
-//! `qcs decode`: a .qcs file (or a prefix of one) to an image, or to a preview per level
+//! `qcs decode`: a .qcs file (or a prefix of one) to an image, or to a preview per level and refinement layer
 //! (`--frames`); the stream helpers `qcs preview` shares.
 
 use super::input::{QcsInput, ReadQcs};
@@ -363,7 +363,8 @@ fn frames(
     Ok(())
 }
 
-/// Byte offsets at which each level chunk ends (where the next chunk starts).
+/// Byte offsets at which each level chunk and each refinement layer ends (where the next
+/// chunk starts).
 fn level_ends(bytes: &[u8]) -> Vec<usize> {
     let ins = qcs::container::inspect(bytes);
     let starts: Vec<u64> = ins
@@ -375,7 +376,7 @@ fn level_ends(bytes: &[u8]) -> Vec<usize> {
     ins.chunks
         .iter()
         .enumerate()
-        .filter(|(_, c)| c.level.is_some())
+        .filter(|(_, c)| c.level.is_some() || c.layer.is_some())
         .map(|(i, _)| starts[i + 1] as usize)
         .collect()
 }

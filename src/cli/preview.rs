@@ -14,7 +14,7 @@ pub struct PreviewArgs {
     pub input: PathBuf,
     /// The animated GIF to write: its name must end in .gif (`-`: standard output).
     pub output: PathBuf,
-    /// Bytes between frames (default: one frame per level).
+    /// Bytes between frames (default: one frame per level and refinement layer).
     #[arg(long, value_parser = super::parse_count)]
     pub every: Option<usize>,
     /// Frame size: WxH, or W, Wx or xH keeping the aspect ratio (default: the image's size,
