@@ -48,7 +48,11 @@ fn framing(layers: usize, streams: usize) -> usize {
 
 /// The weight of each pass of a stream (the squared error in the picture per unit squared
 /// error of a coefficient of its band and channel, over 4^F).
-fn pass_weights(layout: &Layout, frac: u32, passes: &[super::schedule::Pass]) -> Vec<f64> {
+pub(super) fn pass_weights(
+    layout: &Layout,
+    frac: u32,
+    passes: &[super::schedule::Pass],
+) -> Vec<f64> {
     let (_, cw) = channel_classes(layout.channels);
     let bands = layout.bands();
     let scale = (1u64 << (2 * frac)) as f64;
@@ -63,7 +67,7 @@ fn pass_weights(layout: &Layout, frac: u32, passes: &[super::schedule::Pass]) ->
 
 /// Passes of `stream` to keep at slope `lambda`: the point of its (bytes, gain) curve that
 /// maximises gain − λ·bytes.
-fn cut_at(stream: &CodedStream, lambda: f64) -> usize {
+pub(super) fn cut_at(stream: &CodedStream, lambda: f64) -> usize {
     let mut best = (0.0f64, 0usize);
     let mut g = 0.0;
     for (k, (&e, &dg)) in stream.pass_end.iter().zip(&stream.gain).enumerate() {

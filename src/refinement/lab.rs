@@ -1,6 +1,7 @@
 //! Measurements on the dev photographs (ignored tests: `cargo test --release --lib
 //! refinement::lab -- --ignored --nocapture`; `QCS_CORPUS` names the folder).
 
+use super::encode::cut_at;
 use super::picture::{picture, to_planes, Source};
 use super::schedule::Pass;
 use super::wavelet::{forward, low_size, Kernel};
@@ -30,34 +31,9 @@ fn psnr(a: &[u8], b: &[u8]) -> f64 {
     }
 }
 
-/// Linear weight of each pass's band and channel (its squared error in the picture per unit
-/// squared error of a coefficient).
+/// Linear weight of each pass's band and channel, the lab's planes having 2 fraction bits.
 fn pass_weights(layout: &Layout, passes: &[Pass]) -> Vec<f64> {
-    let (_, cw) = channel_classes(layout.channels);
-    let bands = layout.bands();
-    passes
-        .iter()
-        .map(|p| {
-            let w = schedule::band_weight(layout.kernel, &bands[p.band as usize])
-                + cw[p.channel as usize];
-            2f64.powf(w as f64 / 8.0) / (1u64 << (2 * 2)) as f64
-        })
-        .collect()
-}
-
-/// For slope λ, the number of passes of a stream to keep: the point of its (bytes, gain)
-/// curve maximising gain − λ·bytes.
-fn cut_at(stream: &CodedStream, lambda: f64) -> usize {
-    let mut best = (0.0f64, 0usize);
-    let mut g = 0.0;
-    for (k, (&e, &dg)) in stream.pass_end.iter().zip(&stream.gain).enumerate() {
-        g += dg;
-        let v = g - lambda * e as f64;
-        if v > best.0 {
-            best = (v, k + 1);
-        }
-    }
-    best.1
+    encode::pass_weights(layout, 2, passes)
 }
 
 #[test]
