@@ -1,6 +1,6 @@
 //! What a sample's colour is: how the encoder reads the source image at a site.
 //!
-//! Measured on the dev photographs (see the README): the fitted colours give the best
+//! Measured on the dev photographs (MEASUREMENTS.md): the fitted colours give the best
 //! previews at every byte budget and a better full decode than the progressive area mean they
 //! start from; the plain area mean gives the best full decode with exact colours.
 

@@ -273,16 +273,6 @@ impl BandState {
         }
     }
 
-    /// Frees the band's state (its values were taken).
-    pub(crate) fn release(&mut self) {
-        self.flags = Vec::new();
-        self.low = Vec::new();
-        self.high = Vec::new();
-        self.block_active = Vec::new();
-        self.order = Vec::new();
-        self.truth = Vec::new();
-    }
-
     /// The significance of the 8 neighbours, as N_LEFT, N_RIGHT, N_UP, N_DOWN and four
     /// diagonal bits.
     #[inline(always)]
@@ -592,11 +582,6 @@ impl StreamState {
     /// The channel of band `k`.
     pub(crate) fn channel_of(&self, k: usize) -> usize {
         self.channels[k] as usize
-    }
-
-    /// Which band pass `k` codes.
-    pub(crate) fn target(&self, k: usize) -> usize {
-        self.targets[k]
     }
 
     /// Codes until `limit` passes are done, or (decoder) the bytes run out. `tally` hears of

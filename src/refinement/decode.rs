@@ -1,5 +1,5 @@
 //! Decoding a refinement as its bytes arrive: the streams' bytes, their decoders, and the
-//! picture at any size (spec/reconstruction.md, *The refined picture*).
+//! picture at any size (spec/refinement.md §8).
 
 use super::bitplane::StreamState;
 use super::picture::{picture, picture_releasing, thumbnail, Source};

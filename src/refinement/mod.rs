@@ -1,5 +1,5 @@
 //! The refinement: after the quasicrystal levels, a wavelet transform of what their picture
-//! misses, coded bit-plane by bit-plane (spec/format.md, *Refinement*).
+//! misses, coded bit-plane by bit-plane (spec/refinement.md; its chunks: spec/format.md).
 //!
 //! The levels give the first picture; the refinement sharpens it on the pixel grid up to
 //! lossless. Its pieces, in the order the decoder uses them:
@@ -7,10 +7,9 @@
 //! * [`schedule`]: bands, blocks, streams (one per resolution) and the order of passes;
 //! * [`bitplane`]: the coding of a stream's passes, shared by encoder and decoder;
 //! * [`wavelet`]: the integer lifting transforms;
-//! * `picture`: coefficients → pixels, at the image size or a power-of-two fraction of it.
-
-// Until the container and the codec use it (next commits).
-#![allow(dead_code)]
+//! * [`predict`]: the low-low band's prediction from the levels' samples;
+//! * [`decode`] and [`encode`]: a refinement's decoder as bytes arrive, and its encoder;
+//! * `picture` and `resample`: coefficients → pixels, at the image size or any other.
 
 pub(crate) mod bitplane;
 pub(crate) mod decode;

@@ -1,4 +1,4 @@
-//! Pixels ↔ coefficient planes (spec/format.md, *Refinement: channels* and *the picture*).
+//! Pixels ↔ coefficient planes (spec/refinement.md §1 and §8).
 //!
 //! The coded channels are those of the predictive coding: grey (and alpha) as they are, R, G, B
 //! as YCoCg-R (`Co = R − B`, `t = B + (Co >> 1)`, `Cg = G − t`, `Y = t + (Cg >> 1)`), then

@@ -1,5 +1,4 @@
-//! The low-low band's prediction from the levels' samples (spec/format.md, *Refinement: the
-//! prediction*).
+//! The low-low band's prediction from the levels' samples (spec/refinement.md §4).
 //!
 //! Each coefficient of the low-low band is about the mean of the picture over a square of
 //! 2^L × 2^L pixels. The levels already say much of it: coefficient (i, j) is predicted as the

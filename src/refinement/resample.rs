@@ -1,5 +1,4 @@
-//! Exact resampling of a picture to another size (spec/reconstruction.md, *The refined
-//! picture at other sizes*). The source is the picture of transform level k, whose sample i
+//! Exact resampling of a picture to another size (spec/refinement.md §8). The source is the picture of transform level k, whose sample i
 //! (along an axis) stands at the centre of image pixel i·2^k. At level 0, a smaller output
 //! averages the source over each output pixel's footprint (a box filter with exact overlaps);
 //! otherwise each output pixel centre interpolates linearly between the two nearest source

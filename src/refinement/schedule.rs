@@ -1,12 +1,10 @@
 //! Where everything is and in which order it is coded: bands, blocks, streams and passes
-//! (spec/format.md, *Refinement: bands, streams and passes*).
+//! (spec/refinement.md §3 and §5).
 
 use super::wavelet::{low_size, Kernel};
 
 /// The largest number of transform levels a file may use.
 pub(crate) const MAX_LEVELS: u32 = 15;
-/// Bit-planes are counted from 0 (the units bit); a channel has at most this many.
-pub(crate) const MAX_BITPLANES: u32 = 30;
 /// Side of a block, in coefficients.
 pub(crate) const BLOCK: usize = 32;
 

@@ -1,4 +1,4 @@
-//! Integer lifting wavelets (spec/format.md, *Refinement: the transform*).
+//! Integer lifting wavelets (spec/refinement.md §2).
 //!
 //! Two kernels, both computed in integers only, so that every decoder inverts them to the same
 //! values:
