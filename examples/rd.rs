@@ -1,4 +1,6 @@
-//! Rate–distortion of qcs previews beside a progressive JPEG.
+//! Rate–distortion of the quasicrystal levels alone (format version 2, `Target::LevelsOnly`)
+//! beside a progressive JPEG: the levels' table of MEASUREMENTS.md. `examples/peers.py`
+//! measures the encoder's default files (levels, then the refinement) against the peers.
 //!
 //! ```text
 //! cargo run --release --example rd -- [--quality Q | --lossless] [--density D] [--first L0]
@@ -6,7 +8,7 @@
 //!     IMAGE...
 //! ```
 //!
-//! Defaults: predictive coding at quality 50, density 1/4, first level 127 (the README's table).
+//! Defaults: predictive coding at quality 50, density 1/4, first level 127 (MEASUREMENTS.md's table).
 //!
 //! For each image: the PSNR (dB, MSE pooled over R, G, B) of the full-size render (Gouraud
 //! unless `--method` says otherwise) of the
@@ -18,9 +20,9 @@
 use qcs::coding::predictive::Params;
 use qcs::container::Coding;
 use qcs::sampling::SampleColour;
-use qcs::{DecodeOptions, EncodeOptions, Method};
+use qcs::{DecodeOptions, EncodeOptions, Method, Target};
 
-/// The quality of the README's rate–distortion table (the other settings are the encoder's
+/// The quality of the levels' rate–distortion table (the other settings are the levels-only
 /// defaults: density 1/4, first level 127).
 const RD_QUALITY: u8 = 50;
 
@@ -59,6 +61,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let mut opts = EncodeOptions {
         coding: Params::from_quality(RD_QUALITY).coding(),
+        target: Target::LevelsOnly,
         ..Default::default()
     };
     let mut paths = Vec::new();
