@@ -145,7 +145,14 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
         }
     }
 
-    let mut raw = RawDecoder::new(ParserOptions::with_limits(limits()));
+    // The samples a decode decodes: its limits apply to those levels only.
+    let cap = match thumbnail {
+        true => max_samples
+            .unwrap_or(u64::MAX)
+            .min(16 * w as u64 * h as u64),
+        false => max_samples.unwrap_or(u64::MAX),
+    };
+    let mut raw = RawDecoder::new(ParserOptions::with_limits(limits()).decode_before(cap));
     let raw_result = raw.push(file);
 
     match (&strict, &recovered) {
@@ -171,13 +178,7 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
             raw_result.is_ok(),
             "raw decoder fails where decode succeeds"
         );
-        let limit = match thumbnail {
-            true => max_samples
-                .unwrap_or(u64::MAX)
-                .min(16 * w as u64 * h as u64),
-            false => max_samples.unwrap_or(u64::MAX),
-        };
-        assert_eq!(d.samples_used, raw.samples_available().min(limit));
+        assert_eq!(d.samples_used, raw.samples_available().min(cap));
         assert_eq!(
             d.samples_verified,
             raw.samples_verified().min(d.samples_used)
