@@ -6,6 +6,20 @@ use super::picture::{picture, to_planes, Source};
 use super::schedule::Pass;
 use super::wavelet::{forward, low_size, Kernel};
 use super::*;
+use crate::coding::predictive::fixed_position;
+use crate::sites::Quasicrystal;
+
+/// The first `n` samples of a `w × h` file's levels: their fixed positions and decoded colours.
+fn level_samples(file: &[u8], n: u64, w: usize, h: usize) -> (Vec<[i64; 2]>, Vec<u8>) {
+    let mut dec = crate::StreamDecoder::new(crate::Limits::default());
+    dec.push(file).unwrap();
+    let (sites, colours) = dec.samples(n);
+    let seq = Quasicrystal::new(w as u32, h as u32).unwrap();
+    let positions = (sites.iter())
+        .map(|s| fixed_position(&seq.frame(), s.lattice))
+        .collect();
+    (positions, colours.to_vec())
+}
 
 fn corpus() -> Vec<std::path::PathBuf> {
     let dir = std::env::var("QCS_CORPUS").unwrap_or_else(|_| "../shared/corpus/dev".into());
@@ -193,8 +207,7 @@ fn rate_distortion() {
 #[test]
 #[ignore]
 fn base_choice() {
-    use crate::coding::predictive::{fixed_position, Params};
-    use crate::sites::Quasicrystal;
+    use crate::coding::predictive::Params;
     let budgets = [32usize, 64, 128, 256, 512, 1024, 2048, 4096, 8192];
     let cands: Vec<(u64, u64, u8)> = vec![
         (16, 16, 40),
@@ -226,15 +239,7 @@ fn base_choice() {
             };
             let file = crate::encode(&dynimg, &opts).unwrap();
             let b0 = file.len() + 16; // the refinement's header and first layer's framing
-            let mut dec = crate::StreamDecoder::new(crate::Limits::default());
-            dec.push(&file).unwrap();
-            let (sites, colours) = dec.samples(n);
-            let seq = Quasicrystal::new(w as u32, h as u32).unwrap();
-            let positions: Vec<[i64; 2]> = sites
-                .iter()
-                .map(|s| fixed_position(&seq.frame(), s.lattice))
-                .collect();
-            let colours = colours.to_vec();
+            let (positions, colours) = level_samples(&file, n, w, h);
             let frac = 2;
             let kernel = Kernel::Integer97;
             let pred =
@@ -367,8 +372,7 @@ fn thumbnails() {
 #[test]
 #[ignore]
 fn start_pictures() {
-    use crate::coding::predictive::{fixed_position, Params};
-    use crate::sites::Quasicrystal;
+    use crate::coding::predictive::Params;
     let n: u64 = std::env::var("N")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -392,15 +396,7 @@ fn start_pictures() {
             .image
             .to_rgb8()
             .into_raw();
-        let mut dec = crate::StreamDecoder::new(crate::Limits::default());
-        dec.push(&file).unwrap();
-        let (sites, colours) = dec.samples(n);
-        let seq = Quasicrystal::new(w as u32, h as u32).unwrap();
-        let positions: Vec<[i64; 2]> = sites
-            .iter()
-            .map(|s| fixed_position(&seq.frame(), s.lattice))
-            .collect();
-        let colours = colours.to_vec();
+        let (positions, colours) = level_samples(&file, n, w, h);
         let mut row = vec![psnr(&gouraud, &px)];
         for levels in [5u32, 4, 3] {
             let levels = levels.min(super::encode::default_levels(w as u32, h as u32));
