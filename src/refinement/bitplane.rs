@@ -382,6 +382,11 @@ pub(crate) trait Symbols {
     fn begin_unit(&mut self) -> Mode {
         Mode::Block
     }
+    /// Called after a unit coded alone and unjournalled: whether the next unit of its block
+    /// can be coded the same way without returning to the pass runner.
+    fn another_unit(&mut self) -> bool {
+        false
+    }
     /// Called when a unit ran out of bytes: puts back the coder and the probabilities it
     /// changed as they were at the unit's start.
     fn rollback(&mut self, _probs: &mut [Prob]) {}
@@ -470,6 +475,11 @@ impl Symbols for Decoding<'_> {
         };
         self.careful = mode == Mode::Journal;
         mode
+    }
+
+    #[inline(always)]
+    fn another_unit(&mut self) -> bool {
+        !self.careful && self.dec.ready_for_fast(self.bytes, UNIT_BYTES)
     }
 
     fn rollback(&mut self, probs: &mut [Prob]) {
@@ -599,7 +609,8 @@ impl StreamState {
         }
         while self.cursor.pass < limit.min(self.passes.len()) {
             let mode = sym.begin_unit();
-            let saved_cursor = self.cursor;
+            // Only a journalled unit can run out of bytes and be rolled back.
+            let saved_cursor = (mode == Mode::Journal).then_some(self.cursor);
             let done = if mode == Mode::Journal {
                 let b = &self.bands[self.targets[self.cursor.pass]];
                 undo.coefficients.clear();
@@ -622,6 +633,7 @@ impl StreamState {
                 }
                 None => {
                     // Out of bytes: undo the unit and stop.
+                    let saved_cursor = saved_cursor.expect("only a journalled unit runs out");
                     sym.rollback(&mut self.probs);
                     let b = &mut self.bands[self.targets[saved_cursor.pass]];
                     for &(fi, i, f, m) in undo.coefficients.iter().rev() {
@@ -643,7 +655,8 @@ impl StreamState {
         }
     }
 
-    /// Codes the next unit of the current pass if `one`, else the rest of the current block;
+    /// Codes the next unit of the current pass if `one` (and the units after it in its block
+    /// while [`Symbols::another_unit`] says so), else the rest of the current block;
     /// journalled in `undo` if given.
     fn step<S: Symbols, T: Tally>(
         &mut self,
@@ -722,7 +735,7 @@ impl StreamState {
             if cur.column == columns {
                 return Some(next_block(band, cur));
             }
-            if one {
+            if one && !sym.another_unit() {
                 return Some(Step::More);
             }
             x += 1;
