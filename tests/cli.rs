@@ -469,6 +469,15 @@ fn files_are_written_whole_or_not_at_all() {
         Some(0)
     );
     assert!(!odd.exists());
+    // A picture is written beside its name and renamed when whole (the GIF above was
+    // written twice, the second time widened): nothing of that is left.
+    let folder = gif.parent().expect("a folder");
+    let parts: Vec<_> = std::fs::read_dir(folder)
+        .expect("list")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".part"))
+        .collect();
+    assert!(parts.is_empty(), "{parts:?}");
 }
 
 /// A library error is printed once, not once per level of its cause chain.

@@ -572,6 +572,66 @@ pub fn save_image_icc(
     path: &std::path::Path,
     icc: Option<&[u8]>,
 ) -> anyhow::Result<bool> {
+    use std::io::Write;
+    let format = output_format(path)?;
+    let cannot =
+        |e: &dyn std::fmt::Display| anyhow::anyhow!("cannot write {}: {e}", path.display());
+    if is_stdio(path) {
+        // Standard output cannot seek, as some encoders need: the picture is made in memory.
+        let mut bytes = Vec::new();
+        let kept = encode_image(img, |img| {
+            bytes.clear();
+            encode_into(img, format, icc, &mut std::io::Cursor::new(&mut bytes))
+        })
+        .map_err(|e| cannot(&e))?;
+        write_output(path, &bytes)?;
+        return Ok(kept);
+    }
+    // Streamed into a file beside the output, which takes its name only when complete: an
+    // error leaves no partial picture, and the encoded bytes are never all in memory.
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let part = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
+    let written = encode_image(img, |img| {
+        let mut sink = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&part)?);
+        let kept = encode_into(img, format, icc, &mut sink)?;
+        sink.flush()?;
+        Ok(kept)
+    })
+    .map_err(|e| cannot(&e))
+    .and_then(|kept| {
+        std::fs::rename(&part, path).map_err(|e| cannot(&e))?;
+        Ok(kept)
+    });
+    if written.is_err() {
+        let _ = std::fs::remove_file(&part);
+    }
+    written
+}
+
+/// `encode(img)`, and again in 8-bit RGB(A) if the format cannot hold `img`'s colour type.
+fn encode_image(
+    img: &image::DynamicImage,
+    mut encode: impl FnMut(&image::DynamicImage) -> image::ImageResult<bool>,
+) -> image::ImageResult<bool> {
+    match encode(img) {
+        Err(image::ImageError::Unsupported(_)) => encode(&if img.color().has_alpha() {
+            image::DynamicImage::ImageRgba8(img.to_rgba8())
+        } else {
+            image::DynamicImage::ImageRgb8(img.to_rgb8())
+        }),
+        r => r,
+    }
+}
+
+/// Encodes `img` in `format` into `sink`, with the ICC profile `icc` where the format can
+/// hold one (PNG, JPEG, TIFF, WebP). Returns whether the profile was written (`true`
+/// without one).
+fn encode_into<W: std::io::Write + std::io::Seek>(
+    img: &image::DynamicImage,
+    format: image::ImageFormat,
+    icc: Option<&[u8]>,
+    sink: &mut W,
+) -> image::ImageResult<bool> {
     use image::codecs::{jpeg, png, tiff, webp};
     use image::{ImageEncoder, ImageFormat};
     /// Writes `img` with `enc` carrying `icc`, or `None` if `enc` refuses profiles.
@@ -583,37 +643,17 @@ pub fn save_image_icc(
         enc.set_icc_profile(icc.to_vec()).ok()?;
         Some(img.write_with_encoder(enc))
     }
-    let format = output_format(path)?;
-    let write = |img: &image::DynamicImage| -> (Vec<u8>, image::ImageResult<()>, bool) {
-        // Room for an uncompressed picture: no copies as it grows (pages not written to
-        // cost nothing).
-        let room = img.as_bytes().len() + 4096;
-        let mut buf = std::io::Cursor::new(Vec::with_capacity(room));
-        let embedded = icc.and_then(|icc| match format {
-            ImageFormat::Png => with_icc(img, png::PngEncoder::new(&mut buf), icc),
-            ImageFormat::Jpeg => with_icc(img, jpeg::JpegEncoder::new(&mut buf), icc),
-            ImageFormat::Tiff => with_icc(img, tiff::TiffEncoder::new(&mut buf), icc),
-            ImageFormat::WebP => with_icc(img, webp::WebPEncoder::new_lossless(&mut buf), icc),
-            _ => None,
-        });
-        let (result, kept) = match embedded {
-            Some(r) => (r, true),
-            None => (img.write_to(&mut buf, format), icc.is_none()),
-        };
-        (buf.into_inner(), result, kept)
-    };
-    let (mut bytes, mut result, mut kept) = write(img);
-    if matches!(result, Err(image::ImageError::Unsupported(_))) {
-        let wide = if img.color().has_alpha() {
-            image::DynamicImage::ImageRgba8(img.to_rgba8())
-        } else {
-            image::DynamicImage::ImageRgb8(img.to_rgb8())
-        };
-        (bytes, result, kept) = write(&wide);
+    let embedded = icc.and_then(|icc| match format {
+        ImageFormat::Png => with_icc(img, png::PngEncoder::new(&mut *sink), icc),
+        ImageFormat::Jpeg => with_icc(img, jpeg::JpegEncoder::new(&mut *sink), icc),
+        ImageFormat::Tiff => with_icc(img, tiff::TiffEncoder::new(&mut *sink), icc),
+        ImageFormat::WebP => with_icc(img, webp::WebPEncoder::new_lossless(&mut *sink), icc),
+        _ => None,
+    });
+    match embedded {
+        Some(r) => r.map(|()| true),
+        None => img.write_to(sink, format).map(|()| icc.is_none()),
     }
-    result.map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
-    write_output(path, &bytes)?;
-    Ok(kept)
 }
 
 /// A sampler by its CLI name (the quasicrystal included).
