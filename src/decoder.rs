@@ -1,5 +1,9 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
+mod raw;
+
+pub use raw::RawDecoder;
+
 use std::sync::Arc;
 
 use crate::coding::predictive::{fixed_position, Params, PredictiveDecoder};

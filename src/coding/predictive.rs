@@ -48,7 +48,8 @@ pub const POS_ONE: i64 = 256;
 /// The parameters of the predictive coding (its header parameter byte).
 ///
 /// The luma quantisation step `s` (1..=255). Luma, grey and alpha use `s`; the chroma
-/// channels Co and Cg use `2s − 1`. `s = 1` is lossless.
+/// channels Co and Cg use `2s − 1`. `s = 1` is lossless. [`Params::coding`] is the header's
+/// coding for them (defined in `container`, which owns the header's types).
 ///
 /// ```
 /// use qcs::coding::predictive::Params;
@@ -97,17 +98,6 @@ impl Params {
     /// Quantisation step of Co and Cg: `2s − 1`.
     pub fn chroma_step(&self) -> i32 {
         2 * self.luma_step() - 1
-    }
-
-    /// The header's coding for these parameters.
-    ///
-    /// ```
-    /// use qcs::coding::predictive::Params;
-    /// use qcs::container::Coding;
-    /// assert_eq!(Params::from_quality(80).coding(), Coding::Predictive { step: 5 });
-    /// ```
-    pub fn coding(&self) -> crate::container::Coding {
-        crate::container::Coding::Predictive { step: self.step }
     }
 }
 

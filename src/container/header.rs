@@ -113,6 +113,21 @@ impl Coding {
     }
 }
 
+// `Params::coding` is defined here, beside `Coding`, rather than in `coding::predictive`: the
+// coding layer turns colours into bits and does not know the container's types.
+impl crate::coding::predictive::Params {
+    /// The header's coding for these parameters.
+    ///
+    /// ```
+    /// use qcs::coding::predictive::Params;
+    /// use qcs::container::Coding;
+    /// assert_eq!(Params::from_quality(80).coding(), Coding::Predictive { step: 5 });
+    /// ```
+    pub fn coding(&self) -> Coding {
+        Coding::Predictive { step: self.step }
+    }
+}
+
 /// How `qcs info` names a coding.
 ///
 /// ```
