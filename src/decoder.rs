@@ -6,14 +6,14 @@ pub use raw::RawDecoder;
 
 use std::sync::Arc;
 
-use crate::coding::predictive::{fixed_position, Params, PredictiveDecoder};
+use crate::coding::predictive::{Params, PredictiveDecoder};
 use crate::coding::raw::RawUnpacker;
 use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
 };
 use crate::reconstruction::{Method, SampleSet};
 use crate::refinement::decode::RefinementDecoder;
-use crate::sites::{Frame, FrameError, Quasicrystal, Site};
+use crate::sites::{fixed_position, Frame, FrameError, Quasicrystal, Site};
 use crate::{Error, Limits, Result};
 use image::DynamicImage;
 
