@@ -11,9 +11,9 @@ use common::{photo, SIDE};
 use std::hint::black_box;
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
-use qcs::coding::predictive::{fixed_position, Params, PredictiveDecoder, PredictiveEncoder};
+use qcs::coding::predictive::{Params, PredictiveDecoder, PredictiveEncoder};
 use qcs::container::{Header, Layout};
-use qcs::sites::Quasicrystal;
+use qcs::sites::{fixed_position, Quasicrystal};
 
 const COUNTS: [usize; 3] = [16_384, 65_536, 262_144];
 

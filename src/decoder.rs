@@ -1,15 +1,19 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
+mod raw;
+
+pub use raw::RawDecoder;
+
 use std::sync::Arc;
 
-use crate::coding::predictive::{fixed_position, Params, PredictiveDecoder};
+use crate::coding::predictive::{Params, PredictiveDecoder};
 use crate::coding::raw::RawUnpacker;
 use crate::container::{
     Coding, Event, FormatError, Header, Layout, Metadata, Parser, ParserOptions,
 };
 use crate::reconstruction::{Method, SampleSet};
 use crate::refinement::decode::RefinementDecoder;
-use crate::sites::{Frame, FrameError, Quasicrystal, Site};
+use crate::sites::{fixed_position, Frame, FrameError, Quasicrystal, Site};
 use crate::{Error, Limits, Result};
 use image::DynamicImage;
 
@@ -207,23 +211,21 @@ impl StreamDecoder {
                     None => Frame::default_for(h.width, h.height),
                 };
                 // spec/sites.md §2 bounds the frame (1 ≤ W, H ≤ 65535, 1 px ≤ root ≤ 256 px): a
-                // header outside them is malformed, not a bad caller parameter.
+                // header outside them is malformed, not a bad caller parameter, reported at
+                // the field where the parser read it.
+                let at = self.parser.header_offsets();
                 let seq = Quasicrystal::with_frame(h.width, h.height, frame).map_err(|e| {
-                    let leb = |v: u32| (32 - v.leading_zeros()).div_ceil(7).max(1) as u64;
                     let (field, offset, value, expected) = match (e, h.lattice) {
-                        (FrameError::RootLength(r), Some(l)) => {
-                            // The root length is followed by the two origin varints and the
-                            // check byte.
-                            let zz = |v: i32| ((v << 1) ^ (v >> 31)) as u32;
-                            let len = h.encode().map_or(0, |b| b.len() as u64);
-                            let tail = 1 + leb(zz(l.origin_x)) + leb(zz(l.origin_y)) + leb(r);
-                            let offset = len.saturating_sub(tail);
-                            ("lattice root length", offset, r as u64, "65536..=16777216")
-                        }
+                        (FrameError::RootLength(r), Some(_)) => (
+                            "lattice root length",
+                            at.root_length,
+                            r as u64,
+                            "65536..=16777216",
+                        ),
                         (FrameError::Size(..), _) if h.width > 65535 => {
-                            ("width", 3, h.width as u64, "≤ 65535")
+                            ("width", at.width, h.width as u64, "≤ 65535")
                         }
-                        _ => ("height", 3 + leb(h.width), h.height as u64, "≤ 65535"),
+                        _ => ("height", at.height, h.height as u64, "≤ 65535"),
                     };
                     Error::Format(FormatError::InvalidField {
                         field,

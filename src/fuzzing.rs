@@ -9,12 +9,12 @@
 //!
 //! Not a stable API: hidden from the docs, may change with the fuzz targets.
 
-use crate::coding::raw::{self, RawDecoder};
+use crate::coding::raw;
 use crate::container::{self, Coding, Header, Layout, Parser, ParserOptions};
 use crate::sampling::{SampleColour, SourceImage};
 use crate::sites::{Frame, Quasicrystal};
 use crate::{Cadence, DecodeOptions, EncodeOptions, Error, Limits, Method, Previews, Target};
-use crate::{Picture, StreamDecoder};
+use crate::{Picture, RawDecoder, StreamDecoder};
 
 /// The limits every harness decodes with: small images, few samples, little metadata.
 ///

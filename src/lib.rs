@@ -34,7 +34,9 @@ pub mod styles;
 #[cfg(test)]
 mod testing;
 
-pub use decoder::{decode, thumbnail_samples, DecodeOptions, DecodedImage, Picture, StreamDecoder};
+pub use decoder::{
+    decode, thumbnail_samples, DecodeOptions, DecodedImage, Picture, RawDecoder, StreamDecoder,
+};
 pub use encoder::{encode, encode_to, EncodeOptions, Target, DEFAULT_QUALITY};
 pub use error::{Error, Result};
 pub use integration::{register_image_hooks, QcsImageDecoder};

@@ -10,7 +10,7 @@ use qcs::container::{
     FormatError, Header, LatticeFields, Layout, Metadata, Parser, ParserOptions,
 };
 use qcs::limits::LimitError;
-use qcs::{Error, Limits};
+use qcs::{Error, Limits, RawDecoder};
 
 // ---------------------------------------------------------------------------------------------
 // A small hand-built file: 5×4 RGB, N = 7, L0 = 2 → levels [0,2) [2,4) [4,7), raw B = 5.
@@ -1086,9 +1086,9 @@ fn expected_colours() -> Vec<u8> {
 fn raw_decoder_every_prefix_and_byte_at_a_time() {
     let (file, _) = test_file();
     let all = expected_colours();
-    let mut streaming = raw::RawDecoder::new(Default::default());
+    let mut streaming = RawDecoder::new(Default::default());
     for cut in 0..=file.len() {
-        let mut d = raw::RawDecoder::new(Default::default());
+        let mut d = RawDecoder::new(Default::default());
         d.push(&file[..cut]).unwrap();
         let p = d.parser().progress();
         assert_eq!(d.samples_available(), p.samples_available, "cut {cut}");
@@ -1104,7 +1104,7 @@ fn raw_decoder_every_prefix_and_byte_at_a_time() {
     assert_eq!(streaming.end_state(), EndState::Complete);
 
     let h = Header::new(2, 2, Layout::Grey, 4, 2, Coding::Predictive { step: 7 });
-    let mut d = raw::RawDecoder::new(Default::default());
+    let mut d = RawDecoder::new(Default::default());
     let r = d.push(&h.encode().unwrap());
     assert!(matches!(
         r,
@@ -1125,7 +1125,7 @@ fn recovery_after_any_bit_flip_keeps_only_true_samples() {
         for bit in 0..8 {
             let mut bad = file.clone();
             bad[byte] ^= 1 << bit;
-            let mut d = raw::RawDecoder::new(ParserOptions::default().recover(true));
+            let mut d = RawDecoder::new(ParserOptions::default().recover(true));
             let r = d.push(&bad);
             let what = format!("byte {byte} bit {bit}");
             match r {
@@ -1237,12 +1237,12 @@ fn throughput() {
     let file = w.finish().unwrap();
     let enc = t.elapsed();
     let t = std::time::Instant::now();
-    let mut d = raw::RawDecoder::new(Default::default());
+    let mut d = RawDecoder::new(Default::default());
     d.push(&file).unwrap();
     let dec = t.elapsed();
     assert_eq!(d.samples_verified(), n);
     let t = std::time::Instant::now();
-    let mut d = raw::RawDecoder::new(Default::default());
+    let mut d = RawDecoder::new(Default::default());
     for c in file.chunks(1500) {
         d.push(c).unwrap();
     }

@@ -1,9 +1,9 @@
 //! Rate–distortion properties of the predictive coding (coding 1) on the bundled test photos.
 
-use qcs::coding::predictive::{fixed_position, Params, PredictiveDecoder, PredictiveEncoder};
+use qcs::coding::predictive::{Params, PredictiveDecoder, PredictiveEncoder};
 use qcs::container::{Coding, Header};
 use qcs::sampling::{SampleColour, SourceImage};
-use qcs::sites::Quasicrystal;
+use qcs::sites::{fixed_position, Quasicrystal};
 use qcs::{DecodeOptions, EncodeOptions};
 
 const IMAGES: [&str; 3] = [

@@ -407,6 +407,31 @@ fn header_claiming_huge_images_or_sample_counts_fails_at_once() {
     }
 }
 
+#[test]
+fn a_frame_error_is_at_the_field_the_file_has_it() {
+    // The header of the test above (10×10 grey, N = 50, L0 = 8, raw B = 8, root 0.5 px) in
+    // another valid form: N written out after a density byte 0, where the density byte 128
+    // would give it. The root length is at byte 9, one later than in the encoder's form.
+    let mut bytes = b"qc\x50".to_vec(); // version 2, lattice fields, raw, grey
+    bytes.extend_from_slice(&[10, 10, 0, 50, 8, 8]); // W, H, d = 0, N, L0, B
+    bytes.extend_from_slice(&[0x80, 0x80, 0x02, 0, 0]); // root 0x8000, origin (0, 0)
+    bytes.push(qcs::container::header_check(&bytes));
+    assert_eq!(Header::parse(&bytes).map(|(h, _)| h.total_samples), Ok(50));
+    let e = qcs::decode(&bytes, &Default::default()).expect_err("rejected");
+    assert!(
+        matches!(
+            e,
+            Error::Format(FormatError::InvalidField {
+                field: "lattice root length",
+                offset: 9,
+                value: 0x8000,
+                ..
+            })
+        ),
+        "{e}"
+    );
+}
+
 /// The largest file the format and raised limits allow: 65535², as many samples as pixels
 /// (≈ 2^32) at 1 bit. Only
 /// level 0 (8 samples) is given; decoding must cost what those bytes cost.

@@ -4,7 +4,7 @@
 //!
 //! * Colours are transformed reversibly: RGB → YCoCg-R, grey as is, alpha its own channel.
 //! * Site positions are fixed point, 1/256 px, computed exactly from the lattice coordinates
-//!   ([`fixed_position`]).
+//!   ([`crate::sites::fixed_position`]).
 //! * The prediction of a channel is the inverse-squared-distance mean of the [`NEIGHBOURS`]
 //!   nearest earlier samples (ties: lower index first), in integers.
 //! * The residual is quantised with a step from the parameters ([`Params`]): step 1 is lossless.
@@ -35,8 +35,6 @@
 //! ```
 
 use super::range::{Prob, RangeDecoder, RangeEncoder};
-use crate::lattice::ZZeta;
-use crate::sites::Frame;
 use crate::Error;
 
 /// How many earlier samples a prediction uses.
@@ -48,7 +46,8 @@ pub const POS_ONE: i64 = 256;
 /// The parameters of the predictive coding (its header parameter byte).
 ///
 /// The luma quantisation step `s` (1..=255). Luma, grey and alpha use `s`; the chroma
-/// channels Co and Cg use `2s − 1`. `s = 1` is lossless.
+/// channels Co and Cg use `2s − 1`. `s = 1` is lossless. [`Params::coding`] is the header's
+/// coding for them (defined in `container`, which owns the header's types).
 ///
 /// ```
 /// use qcs::coding::predictive::Params;
@@ -98,50 +97,6 @@ impl Params {
     pub fn chroma_step(&self) -> i32 {
         2 * self.luma_step() - 1
     }
-
-    /// The header's coding for these parameters.
-    ///
-    /// ```
-    /// use qcs::coding::predictive::Params;
-    /// use qcs::container::Coding;
-    /// assert_eq!(Params::from_quality(80).coding(), Coding::Predictive { step: 5 });
-    /// ```
-    pub fn coding(&self) -> crate::container::Coding {
-        crate::container::Coding::Predictive { step: self.step }
-    }
-}
-
-const TAU_32: i128 = 6_949_403_065; // round(τ · 2^32)
-const SIN72_32: i128 = 4_084_756_634; // round(sin 72° · 2^32)
-
-/// The exact fixed-point position (1/256 px) of a lattice point in a frame, in integers:
-///
-/// ```text
-/// 2·Re x = a + bτ,  Im x / sin72° = u + vτ          (ZZeta::re2, ZZeta::im_s)
-/// X = floor((2^33·Cx + L·(2^32·a + T·b) + 2^40) / 2^41)
-/// Y = floor((2^64·Cy + L·S·(2^32·u + T·v) + 2^71) / 2^72)
-/// T = round(τ·2^32) = 6949403065,  S = round(sin72°·2^32) = 4084756634
-/// ```
-///
-/// ```
-/// use qcs::sites::Quasicrystal;
-/// let q = Quasicrystal::new(64, 48).unwrap();
-/// for s in q.first(50) {
-///     let p = qcs::coding::predictive::fixed_position(&q.frame(), s.lattice);
-///     assert!((p[0] as f64 / 256.0 - s.pos[0]).abs() <= 0.5 / 256.0 + 1e-9);
-///     assert!((p[1] as f64 / 256.0 - s.pos[1]).abs() <= 0.5 / 256.0 + 1e-9);
-/// }
-/// ```
-pub fn fixed_position(frame: &Frame, x: ZZeta) -> [i64; 2] {
-    let l = frame.root_len as i128;
-    let re = x.re2();
-    let im = x.im_s();
-    let nx = ((frame.origin[0] as i128) << 33) + l * ((re.a << 32) + TAU_32 * re.b);
-    let ny = ((frame.origin[1] as i128) << 64) + l * SIN72_32 * ((im.a << 32) + TAU_32 * im.b);
-    [
-        ((nx + (1i128 << 40)) >> 41) as i64,
-        ((ny + (1i128 << 71)) >> 72) as i64,
-    ]
 }
 
 /// Channel values in the coded domain, per layout: YCoCg-R for RGB(A).
@@ -664,8 +619,8 @@ impl PredictiveEncoder {
         })
     }
 
-    /// Encodes the next level: its sites' fixed-point positions ([`fixed_position`]) and their
-    /// 8-bit colours in layout order. Returns the level's payload.
+    /// Encodes the next level: its sites' fixed-point positions
+    /// ([`crate::sites::fixed_position`]) and their 8-bit colours in layout order. Returns the level's payload.
     pub fn encode_level(
         &mut self,
         positions: &[[i64; 2]],

@@ -113,6 +113,21 @@ impl Coding {
     }
 }
 
+// `Params::coding` is defined here, beside `Coding`, rather than in `coding::predictive`: the
+// coding layer turns colours into bits and does not know the container's types.
+impl crate::coding::predictive::Params {
+    /// The header's coding for these parameters.
+    ///
+    /// ```
+    /// use qcs::coding::predictive::Params;
+    /// use qcs::container::Coding;
+    /// assert_eq!(Params::from_quality(80).coding(), Coding::Predictive { step: 5 });
+    /// ```
+    pub fn coding(&self) -> Coding {
+        Coding::Predictive { step: self.step }
+    }
+}
+
 /// How `qcs info` names a coding.
 ///
 /// ```
@@ -184,6 +199,19 @@ pub struct Header {
     pub lattice: Option<LatticeFields>,
     /// Whether a refinement follows the levels (format version 3; version 2 without).
     pub refinement: bool,
+}
+
+/// Where a parsed header's fields are, in bytes from the start of the file (0 for a field the
+/// header leaves out): what the header's errors name, and the decoder's when the site
+/// construction rejects the frame (spec/format.md §Header).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct FieldOffsets {
+    pub(crate) width: u64,
+    pub(crate) height: u64,
+    pub(crate) total_samples: u64,
+    pub(crate) first_level: u64,
+    pub(crate) parameter: u64,
+    pub(crate) root_length: u64,
 }
 
 /// Internal: why parsing a prefix stopped.
@@ -363,29 +391,29 @@ impl Header {
     /// ```
     pub fn validate(&self) -> Result<(), FormatError> {
         // Offsets are unknown here (0); the parser reports real offsets.
-        self.validate_at(&[0; 6])
+        self.validate_at(&FieldOffsets::default())
     }
 
-    /// `offsets`: width, height, total samples, first level, coding parameter, root length.
-    fn validate_at(&self, offsets: &[u64; 6]) -> Result<(), FormatError> {
+    /// The rules, with errors at the fields' `offsets`.
+    fn validate_at(&self, offsets: &FieldOffsets) -> Result<(), FormatError> {
         if self.width == 0 {
-            return Err(invalid("width", offsets[0], 0, "≥ 1"));
+            return Err(invalid("width", offsets.width, 0, "≥ 1"));
         }
         if self.height == 0 {
-            return Err(invalid("height", offsets[1], 0, "≥ 1"));
+            return Err(invalid("height", offsets.height, 0, "≥ 1"));
         }
         if self.total_samples == 0 {
-            return Err(invalid("total samples", offsets[2], 0, "≥ 1"));
+            return Err(invalid("total samples", offsets.total_samples, 0, "≥ 1"));
         }
         if self.first_level == 0 {
-            return Err(invalid("first level size", offsets[3], 0, "≥ 1"));
+            return Err(invalid("first level size", offsets.first_level, 0, "≥ 1"));
         }
         match self.coding {
             Coding::Raw { bits } => {
                 if !(1..=8).contains(&bits) {
                     return Err(invalid(
                         "raw bits per channel",
-                        offsets[4],
+                        offsets.parameter,
                         bits as u64,
                         "1..=8",
                     ));
@@ -399,7 +427,7 @@ impl Header {
                     if !fits {
                         return Err(invalid(
                             "total samples",
-                            offsets[2],
+                            offsets.total_samples,
                             self.total_samples,
                             "levels whose payload fits in 2^32 − 1 bytes",
                         ));
@@ -408,13 +436,18 @@ impl Header {
             }
             Coding::Predictive { step } => {
                 if step == 0 {
-                    return Err(invalid("predictive step", offsets[4], 0, "1..=255"));
+                    return Err(invalid("predictive step", offsets.parameter, 0, "1..=255"));
                 }
             }
         }
         if let Some(l) = &self.lattice {
             if l.root_length == 0 {
-                return Err(invalid("lattice root length", offsets[5], 0, "≥ 1"));
+                return Err(invalid(
+                    "lattice root length",
+                    offsets.root_length,
+                    0,
+                    "≥ 1",
+                ));
             }
         }
         Ok(())
@@ -495,7 +528,7 @@ impl Header {
     /// checks them); a buffer that ends inside the header is [`FormatError::TruncatedHeader`].
     pub fn parse(bytes: &[u8]) -> Result<(Header, usize), FormatError> {
         match Self::parse_prefix(bytes) {
-            Ok(r) => Ok(r),
+            Ok((header, len, _)) => Ok((header, len)),
             Err(Stop::Err(e)) => Err(e),
             Err(Stop::More) => Err(FormatError::TruncatedHeader {
                 offset: bytes.len() as u64,
@@ -505,8 +538,9 @@ impl Header {
 
     /// Parses a header from a prefix: `Stop::More` if the bytes end inside it. Errors in the
     /// magic and the version, and malformed varints, are reported as soon as their
-    /// byte arrives; then the check byte; then the value rules.
-    pub(crate) fn parse_prefix(bytes: &[u8]) -> Result<(Header, usize), Stop> {
+    /// byte arrives; then the check byte; then the value rules. With the header, its length
+    /// and where its fields are.
+    pub(crate) fn parse_prefix(bytes: &[u8]) -> Result<(Header, usize, FieldOffsets), Stop> {
         let mut c = Cursor { bytes, pos: 0 };
         for (i, &m) in MAGIC.iter().enumerate() {
             let b = c.u8()?;
@@ -586,8 +620,16 @@ impl Header {
             lattice,
             refinement,
         };
-        header.validate_at(&[o_w, o_h, o_n, o_l0, o_param, o_root])?;
-        Ok((header, c.pos))
+        let offsets = FieldOffsets {
+            width: o_w,
+            height: o_h,
+            total_samples: o_n,
+            first_level: o_l0,
+            parameter: o_param,
+            root_length: o_root,
+        };
+        header.validate_at(&offsets)?;
+        Ok((header, c.pos, offsets))
     }
 }
 

@@ -1,7 +1,7 @@
 //! The push parser: bytes in any chunking → [`Event`]s (spec/format.md §Decoding and truncation).
 
 use super::chunk::{self, ICC, LEVEL, REFINEMENT, TEXT};
-use super::header::{Header, Stop, MAX_HEADER_LEN};
+use super::header::{FieldOffsets, Header, Stop, MAX_HEADER_LEN};
 use super::refinement::{Bad, Read, RefinementHeader, TableReader};
 use super::varint::VarintReader;
 use super::{ChunkRef, Coding, FormatError};
@@ -343,6 +343,8 @@ pub struct Parser {
     offset: u64,
     state: State,
     header: Option<Header>,
+    /// Where the header's fields are, once it has been parsed.
+    header_offsets: FieldOffsets,
     level_count: u32,
     header_buf: Vec<u8>,
     chunk_index: u32,
@@ -365,6 +367,7 @@ impl Parser {
             offset: 0,
             state: State::Header,
             header: None,
+            header_offsets: FieldOffsets::default(),
             level_count: 0,
             header_buf: Vec::new(),
             chunk_index: 0,
@@ -400,6 +403,11 @@ impl Parser {
     /// The header, once it has been parsed.
     pub fn header(&self) -> Option<&Header> {
         self.header.as_ref()
+    }
+
+    /// Where the header's fields are in the file, once it has been parsed (all 0 before).
+    pub(crate) fn header_offsets(&self) -> FieldOffsets {
+        self.header_offsets
     }
 
     /// Whether every level is verified and the input ends between chunks.
@@ -631,7 +639,7 @@ impl Parser {
                 Ok(take)
             }
             Err(Stop::Err(e)) => Err(Fail::Format(e)),
-            Ok((header, len)) => {
+            Ok((header, len, offsets)) => {
                 let limits = &self.opts.limits;
                 limits
                     .check_image(header.width as u64, header.height as u64)
@@ -643,6 +651,7 @@ impl Parser {
                 limits.check_samples(decoded).map_err(Fail::Limits)?;
                 self.level_count = header.level_count();
                 self.header = Some(header.clone());
+                self.header_offsets = offsets;
                 events.push(Event::Header(header));
                 // Level 0 follows without a tag; its CRC covers the header too.
                 let mut hasher = crc32fast::Hasher::new();

@@ -1,11 +1,11 @@
 //! The levels of a file: the sample colours, their coded payloads, and the colours a decoder
 //! reads back (which the refinement's prediction starts from).
 
-use crate::coding::predictive::{fixed_position, Params, PredictiveEncoder};
+use crate::coding::predictive::{Params, PredictiveEncoder};
 use crate::coding::raw;
 use crate::container::{Coding, Header};
 use crate::sampling::{SampleColour, SourceImage};
-use crate::sites::Quasicrystal;
+use crate::sites::{fixed_position, Quasicrystal};
 use crate::Result;
 
 /// Coded levels.

@@ -14,11 +14,10 @@
 //! 3. the two triangles of every edge whose four sites are exactly cocircular are merged.
 //!
 //! See `spec/reconstruction.md` for the rule that draws the cells.
-
-use super::delaunay::LiveCells;
-use super::mesh::Triangulation;
-use crate::lattice::ZZeta;
-use crate::sites::Point;
+//!
+//! This module holds the type and what reads it; the builders that make it are beside it and
+//! depend on it, not the reverse: [`Cells::build`] and [`Cells::incremental`] in
+//! `delaunay.rs`, [`Cells::atlas`] in `atlas.rs`.
 
 /// The Delaunay subdivision of a sample set into convex cells.
 ///
@@ -52,84 +51,6 @@ pub struct Cells {
 }
 
 impl Cells {
-    /// The canonical cells of `mesh`, whose vertex data index `lattice` (the exact point of
-    /// every sample). `None` if some vertex has no exact point, if an exact point is beyond
-    /// [`crate::lattice::EXACT_LIMIT`], or if the triangulation is inconsistent with the
-    /// exact points (then the caller keeps `mesh`'s own triangles).
-    ///
-    /// ```
-    /// use qcs::lattice::ZZeta;
-    /// use qcs::reconstruction::{Cells, Triangulation, Vertex};
-    /// use spade::{Point2, Triangulation as _};
-    /// // The regular pentagon 1, ζ, …, ζ⁴ (unit roots, pixel = 10 + 5·x).
-    /// let z = |k: usize| { let mut n = [0i64; 4]; if k < 4 { n[k] = 1 } else { n = [-1; 4] }; ZZeta::new(n) };
-    /// let lattice: Vec<Option<ZZeta>> = (0..5).map(|k| Some(z(k))).collect();
-    /// let mut mesh = Triangulation::new();
-    /// for (k, x) in lattice.iter().enumerate() {
-    ///     let (re, im) = x.unwrap().to_f64();
-    ///     mesh.insert(Vertex { position: Point2::new(10.0 + 5.0 * re, 10.0 + 5.0 * im), index: k as u32 }).unwrap();
-    /// }
-    /// assert_eq!(mesh.num_inner_faces(), 3);
-    /// let cells = Cells::build(&mesh, &lattice).unwrap();
-    /// assert_eq!(cells.len(), 1);
-    /// // Counter-clockwise from the smallest lattice point, ζ⁴ = (−1, −1, −1, −1).
-    /// assert_eq!(cells.get(0), Some(&[4u32, 0, 1, 2, 3][..]));
-    /// ```
-    pub fn build(mesh: &Triangulation, lattice: &[Option<ZZeta>]) -> Option<Cells> {
-        Some(LiveCells::build(mesh, lattice)?.cells())
-    }
-
-    /// The canonical cells of the points `lattice` (exact points, at pixel `positions`),
-    /// built without a whole `spade` triangulation: `spade` bulk loads the first few points
-    /// and the others are inserted with exact predicates, in rounds of doubling size.
-    /// Faster than [`Cells::build`] on progressive sites (`benches/cells.rs`), and the same
-    /// cells. `None` if a point has no exact point or is beyond
-    /// [`crate::lattice::EXACT_LIMIT`] (or, defensively, if the insertion finds the mesh
-    /// inconsistent: then [`Cells::build`] is the fallback).
-    ///
-    /// ```
-    /// use qcs::reconstruction::{Cells, SampleSet};
-    /// use qcs::sites::Quasicrystal;
-    /// let mut set = SampleSet::new(64, 64, 1);
-    /// for s in Quasicrystal::new(64, 64)?.first(300) {
-    ///     set.push_exact(s.pos, s.lattice, &[0]);
-    /// }
-    /// let grown = Cells::incremental(set.points(), set.point_lattice()).expect("exact points");
-    /// let built = Cells::build(&set.triangulation().clone(), set.point_lattice()).unwrap();
-    /// let sorted = |c: &Cells| { let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect(); v.sort(); v };
-    /// assert_eq!(sorted(&grown), sorted(&built));
-    /// # Ok::<(), qcs::sites::FrameError>(())
-    /// ```
-    pub fn incremental(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<Cells> {
-        Some(LiveCells::grow(positions, lattice)?.cells())
-    }
-
-    /// The canonical cells of the points `lattice` (at pixel `positions`), built like
-    /// [`Cells::incremental`] near the hull and by look-up elsewhere: a quasicrystal has few
-    /// local configurations, so the cells around most sites are computed once per
-    /// configuration and copied for the others (`src/reconstruction/atlas.rs` says why that
-    /// is exact). The same cells as [`Cells::incremental`] (in another order), about twice
-    /// as fast from 50 000 points (`benches/cells.rs`; below that, or where the
-    /// configurations are too diverse to pay, it is exact insertion), and `None` in the same
-    /// cases. For a set that gets no more points; a growing one keeps
-    /// [`Cells::incremental`]'s structure.
-    ///
-    /// ```
-    /// use qcs::reconstruction::{Cells, SampleSet};
-    /// use qcs::sites::Quasicrystal;
-    /// let mut set = SampleSet::new(256, 256, 1);
-    /// for s in Quasicrystal::new(256, 256)?.first(8000) {
-    ///     set.push_exact(s.pos, s.lattice, &[0]);
-    /// }
-    /// let (p, l) = (set.points(), set.point_lattice());
-    /// let sorted = |c: Cells| { let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect(); v.sort(); v };
-    /// assert_eq!(sorted(Cells::atlas(p, l).unwrap()), sorted(Cells::incremental(p, l).unwrap()));
-    /// # Ok::<(), qcs::sites::FrameError>(())
-    /// ```
-    pub fn atlas(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<Cells> {
-        super::atlas::cells(positions, lattice)
-    }
-
     pub(crate) fn from_parts(
         offsets: Vec<u32>,
         vertices: Vec<u32>,

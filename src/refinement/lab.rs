@@ -6,8 +6,7 @@ use super::picture::{picture, to_planes, Source};
 use super::schedule::Pass;
 use super::wavelet::{forward, low_size, Kernel};
 use super::*;
-use crate::coding::predictive::fixed_position;
-use crate::sites::Quasicrystal;
+use crate::sites::{fixed_position, Quasicrystal};
 
 /// The first `n` samples of a `w × h` file's levels: their fixed positions and decoded colours.
 fn level_samples(file: &[u8], n: u64, w: usize, h: usize) -> (Vec<[i64; 2]>, Vec<u8>) {

@@ -22,4 +22,6 @@ pub trait Sampler {
 
 mod quasicrystal;
 
-pub use quasicrystal::{site_order, Frame, FrameError, Quasicrystal, Site, DENSITY, FX_ONE};
+pub use quasicrystal::{
+    fixed_position, site_order, Frame, FrameError, Quasicrystal, Site, DENSITY, FX_ONE,
+};

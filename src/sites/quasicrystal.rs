@@ -118,6 +118,41 @@ impl Frame {
     }
 }
 
+const TAU_32: i128 = 6_949_403_065; // round(τ · 2^32)
+const SIN72_32: i128 = 4_084_756_634; // round(sin 72° · 2^32)
+
+/// The exact fixed-point position (1/256 px) of a lattice point in a frame, in integers: the
+/// positions of the predictive coding and of the refinement's prediction (spec/format.md,
+/// *Coding 1*, *Positions*):
+///
+/// ```text
+/// 2·Re x = a + bτ,  Im x / sin72° = u + vτ          (ZZeta::re2, ZZeta::im_s)
+/// X = floor((2^33·Cx + L·(2^32·a + T·b) + 2^40) / 2^41)
+/// Y = floor((2^64·Cy + L·S·(2^32·u + T·v) + 2^71) / 2^72)
+/// T = round(τ·2^32) = 6949403065,  S = round(sin72°·2^32) = 4084756634
+/// ```
+///
+/// ```
+/// use qcs::sites::Quasicrystal;
+/// let q = Quasicrystal::new(64, 48).unwrap();
+/// for s in q.first(50) {
+///     let p = qcs::sites::fixed_position(&q.frame(), s.lattice);
+///     assert!((p[0] as f64 / 256.0 - s.pos[0]).abs() <= 0.5 / 256.0 + 1e-9);
+///     assert!((p[1] as f64 / 256.0 - s.pos[1]).abs() <= 0.5 / 256.0 + 1e-9);
+/// }
+/// ```
+pub fn fixed_position(frame: &Frame, x: ZZeta) -> [i64; 2] {
+    let l = frame.root_len as i128;
+    let re = x.re2();
+    let im = x.im_s();
+    let nx = ((frame.origin[0] as i128) << 33) + l * ((re.a << 32) + TAU_32 * re.b);
+    let ny = ((frame.origin[1] as i128) << 64) + l * SIN72_32 * ((im.a << 32) + TAU_32 * im.b);
+    [
+        ((nx + (1i128 << 40)) >> 41) as i64,
+        ((ny + (1i128 << 71)) >> 72) as i64,
+    ]
+}
+
 /// A site of the sequence: its lattice point and its pixel position.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Site {
