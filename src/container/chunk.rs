@@ -2,6 +2,7 @@
 //! §Chunks); level 0 comes first, without its tag, its CRC covering the header too.
 
 use super::varint;
+use byteorder::{ByteOrder, LittleEndian};
 
 /// `L`: the next level's colour data (critical).
 pub const LEVEL: u8 = b'L';
@@ -59,7 +60,9 @@ pub fn encode_first(header: &[u8], payload: &[u8]) -> Option<Vec<u8>> {
     let mut crc = crc32fast::Hasher::new();
     crc.update(header);
     crc.update(&out);
-    out.extend_from_slice(&crc.finalize().to_le_bytes());
+    let at = out.len();
+    out.resize(at + 4, 0);
+    LittleEndian::write_u32(&mut out[at..], crc.finalize());
     Some(out)
 }
 

@@ -6,6 +6,7 @@ use super::refinement::{Bad, Read, RefinementHeader, TableReader};
 use super::varint::VarintReader;
 use super::{ChunkRef, Coding, FormatError};
 use crate::Limits;
+use byteorder::{ByteOrder, LittleEndian};
 use std::ops::Range;
 
 /// How a [`Parser`] treats limits and damage.
@@ -601,7 +602,7 @@ impl Parser {
                     };
                     return Ok(1);
                 }
-                let stored = u32::from_le_bytes(bytes);
+                let stored = LittleEndian::read_u32(&bytes);
                 if stored != computed && !cfg!(fuzzing) {
                     return Err(Fail::Format(FormatError::ChunkCrc {
                         chunk,

@@ -23,6 +23,7 @@
 //! and an empty circle stays empty), and as they surround `u` within the hull, they are all
 //! the cells of the smaller set around `u`.
 
+use byteorder::{ByteOrder, LittleEndian};
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
@@ -64,7 +65,7 @@ impl std::hash::Hasher for KeyHash {
     fn write(&mut self, bytes: &[u8]) {
         let mut words = bytes.chunks_exact(8);
         for w in &mut words {
-            self.write_u64(u64::from_le_bytes(w.try_into().unwrap_or_default()));
+            self.write_u64(LittleEndian::read_u64(w));
         }
         for &b in words.remainder() {
             self.write_u64(b.into());
