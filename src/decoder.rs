@@ -216,13 +216,13 @@ impl StreamDecoder {
                 let at = self.parser.header_offsets();
                 let seq = Quasicrystal::with_frame(h.width, h.height, frame).map_err(|e| {
                     let (field, offset, value, expected) = match (e, h.lattice) {
-                        (FrameError::RootLength(r), Some(_)) => (
+                        (FrameError::RootLength { root_len }, Some(_)) => (
                             "lattice root length",
                             at.root_length,
-                            r as u64,
+                            root_len as u64,
                             "65536..=16777216",
                         ),
-                        (FrameError::Size(..), _) if h.width > 65535 => {
+                        (FrameError::Size { .. }, _) if h.width > 65535 => {
                             ("width", at.width, h.width as u64, "≤ 65535")
                         }
                         _ => ("height", at.height, h.height as u64, "≤ 65535"),

@@ -426,7 +426,7 @@ fn huge_claims_rejected_by_default_limits() {
     let bytes = h.encode().unwrap();
     let (p, ev, r) = parse_all(&bytes, Default::default());
     assert!(
-        matches!(r, Err(Error::Limits(LimitError::Dimension(..)))),
+        matches!(r, Err(Error::Limits(LimitError::Dimension { .. }))),
         "{r:?}"
     );
     assert!(ev.is_empty());
@@ -443,7 +443,7 @@ fn huge_claims_rejected_by_default_limits() {
     );
     let r = parse_all(&h.encode().unwrap(), Default::default()).2;
     assert!(
-        matches!(r, Err(Error::Limits(LimitError::Samples(..)))),
+        matches!(r, Err(Error::Limits(LimitError::Samples { .. }))),
         "{r:?}"
     );
 
@@ -862,7 +862,13 @@ fn metadata_limit() {
     limits.max_metadata_bytes = 10; // the text chunk has 11 bytes
     let (_, ev, r) = parse_all(&file, limits.into());
     assert!(
-        matches!(r, Err(Error::Limits(LimitError::Metadata(11, 10)))),
+        matches!(
+            r,
+            Err(Error::Limits(LimitError::Metadata {
+                value: 11,
+                limit: 10
+            }))
+        ),
         "{r:?}"
     );
     assert!(ev

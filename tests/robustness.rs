@@ -370,7 +370,10 @@ fn header_claiming_huge_images_or_sample_counts_fails_at_once() {
     );
     let e = qcs::decode(&h.encode().unwrap(), &Default::default()).expect_err("rejected");
     assert!(
-        matches!(e, Error::Limits(qcs::limits::LimitError::ImagePixels(..))),
+        matches!(
+            e,
+            Error::Limits(qcs::limits::LimitError::ImagePixels { .. })
+        ),
         "{e}"
     );
     // More samples than pixels.
