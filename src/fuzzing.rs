@@ -230,14 +230,18 @@ pub fn push(data: &[u8]) {
         let r = dec.push(&file[pos..end]);
         pos = end;
         if failed {
-            assert!(r.is_err(), "push succeeds after an error");
+            assert!(
+                matches!(r, Err(Error::Poisoned { .. })),
+                "push after an error: {r:?}"
+            );
             continue;
         }
         if r.is_err() {
             failed = true;
+            let again = dec.push(&[]);
             assert!(
-                dec.push(&[]).is_err(),
-                "decoder not poisoned after an error"
+                matches!(again, Err(Error::Poisoned { .. })),
+                "decoder not poisoned after an error: {again:?}"
             );
             continue;
         }

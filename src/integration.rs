@@ -11,15 +11,13 @@ use std::io::Read;
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
 
 fn to_image_error(e: Error) -> ImageError {
+    let hint = || ImageFormatHint::Name("qcs".into());
     match e {
         Error::Io(e) => ImageError::IoError(e),
-        Error::Limits(_) => {
+        Error::Limits(_) | Error::OutOfMemory { .. } => {
             ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory))
         }
-        other => ImageError::Decoding(DecodingError::new(
-            ImageFormatHint::Name("qcs".into()),
-            other,
-        )),
+        other => ImageError::Decoding(DecodingError::new(hint(), other)),
     }
 }
 
