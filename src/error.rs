@@ -1,6 +1,18 @@
 //! The library's error type, split by who is to blame: the environment (I/O), the file
 //! (format), the caller's limits, the caller's arguments, the caller's use of a stateful
 //! object, and the machine's memory.
+//!
+//! A variant that wraps another error ([`Error::Io`], [`Error::Format`], [`Error::Limits`])
+//! says only what kind of failure it is and gives the wrapped error as its
+//! [`source`](std::error::Error::source): print the chain to see the whole story.
+//!
+//! ```
+//! use std::error::Error as _;
+//! let err = qcs::decode(b"qc\xE0", &Default::default()).unwrap_err();
+//! assert_eq!(err.to_string(), "malformed file");
+//! let cause = err.source().expect("the format error");
+//! assert!(cause.to_string().starts_with("unsupported format version 7"), "{cause}");
+//! ```
 
 use thiserror::Error as ThisError;
 
@@ -9,14 +21,14 @@ use thiserror::Error as ThisError;
 #[non_exhaustive]
 pub enum Error {
     /// Reading or writing failed. Blame: the environment (the reader or writer given).
-    #[error("i/o error: {0}")]
+    #[error("i/o error")]
     Io(#[from] std::io::Error),
     /// The file breaks the format (see `spec/format.md`). Blame: the file.
-    #[error("malformed file: {0}")]
+    #[error("malformed file")]
     Format(#[from] crate::container::FormatError),
     /// The file or request is valid but exceeds the configured [`crate::Limits`]. Blame:
     /// nobody's fault; the caller's limits refuse it.
-    #[error("limit exceeded: {0}")]
+    #[error("limit exceeded")]
     Limits(#[from] crate::limits::LimitError),
     /// The bytes given end inside the header: there is nothing to draw yet.
     ///

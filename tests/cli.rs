@@ -771,6 +771,9 @@ fn a_huge_file_is_refused_in_bounded_memory() {
     let (c, err) = code_of(qcs().args(["info", "--max-input", "none"]).arg(&long));
     assert_eq!(c, Some(3), "{err}");
     assert!(err.contains("CRC mismatch"), "{err}");
+    // Each part of the cause chain once: "… is damaged: malformed file: chunk … CRC mismatch …".
+    assert_eq!(err.matches("malformed file").count(), 1, "{err}");
+    assert_eq!(err.matches("CRC mismatch").count(), 1, "{err}");
     assert!(!png.exists());
 }
 

@@ -272,7 +272,11 @@ fn payload_flip_names_chunk_and_offset() {
     let mut bad = file.clone();
     bad[level1.payload.start] ^= 0x10;
     let e = qcs::decode(&bad, &Default::default()).expect_err("CRC catches it");
-    let msg = e.to_string();
+    // The error says what kind it is; its source, the format error, says what and where.
+    assert_eq!(e.to_string(), "malformed file");
+    let msg = std::error::Error::source(&e)
+        .expect("the format error")
+        .to_string();
     assert!(
         msg.contains(&format!(
             "chunk #{} 'L' at byte {}",

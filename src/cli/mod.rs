@@ -246,8 +246,9 @@ pub fn main() -> ExitCode {
         // The reader went away (`qcs sites … | head`): nothing more to say, as for `yes`.
         Err(e) if closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            // `{e:#}` repeats a cause whose parent already prints it (`thiserror`'s
-            // "malformed file: {0}" with `#[from]`, the image crate's errors): skip those.
+            // The cause chain, each message once: `qcs::Error` prints only its own part
+            // ("malformed file") and leaves the rest to its source, but the image crate's
+            // errors also print their source, which `{e:#}` would then repeat: skip those.
             let mut msg = String::new();
             for cause in e.chain() {
                 let s = cause.to_string();
