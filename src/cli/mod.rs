@@ -205,8 +205,12 @@ fn exit_code(e: &anyhow::Error) -> u8 {
         }
         if let Some(q) = cause.downcast_ref::<qcs::Error>() {
             return match q {
-                qcs::Error::Format(_) | qcs::Error::NeedMoreData => 3,
+                qcs::Error::Format(_) => 3,
                 qcs::Error::Limits(_) => 4,
+                // A file cut inside its header is not malformed (README: a neutral grey
+                // picture, exit 0) and every command draws it so: this reaching here is qcs's
+                // own failure, not the input's.
+                qcs::Error::NeedMoreData => 1,
                 _ => 1,
             };
         }
