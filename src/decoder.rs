@@ -177,13 +177,13 @@ impl StreamDecoder {
 
     /// Feeds the next bytes of the file (any length, including 0).
     ///
-    /// Running out of bytes is never an error. A damaged file is an error (the decoder is
-    /// then poisoned), unless recovery was asked for.
+    /// Running out of bytes is never an error. A damaged file is an error, unless recovery was
+    /// asked for; the decoder is then poisoned: every later push is [`Error::Poisoned`].
     pub fn push(&mut self, bytes: &[u8]) -> Result<()> {
         if self.failed {
-            return Err(Error::Parameter(
-                "qcs stream decoder used after an error".into(),
-            ));
+            return Err(Error::Poisoned {
+                object: "StreamDecoder",
+            });
         }
         self.events.clear();
         let r = self.parser.push(bytes, &mut self.events);
@@ -216,13 +216,13 @@ impl StreamDecoder {
                 let at = self.parser.header_offsets();
                 let seq = Quasicrystal::with_frame(h.width, h.height, frame).map_err(|e| {
                     let (field, offset, value, expected) = match (e, h.lattice) {
-                        (FrameError::RootLength(r), Some(_)) => (
+                        (FrameError::RootLength { root_len }, Some(_)) => (
                             "lattice root length",
                             at.root_length,
-                            r as u64,
+                            root_len as u64,
                             "65536..=16777216",
                         ),
-                        (FrameError::Size(..), _) if h.width > 65535 => {
+                        (FrameError::Size { .. }, _) if h.width > 65535 => {
                             ("width", at.width, h.width as u64, "≤ 65535")
                         }
                         _ => ("height", at.height, h.height as u64, "≤ 65535"),
@@ -621,15 +621,15 @@ impl StreamDecoder {
     fn check_output_size(&self, width: u32, height: u32) -> Result<()> {
         self.limits.check_output(width as u64, height as u64)?;
         if width == 0 || height == 0 {
-            return Err(Error::Parameter(format!(
-                "output size {width}×{height} is empty"
-            )));
+            return Err(Error::invalid(
+                "output size",
+                format_args!("{width}×{height}"),
+                "at least 1×1",
+            ));
         }
-        let bytes = (width as u64 * height as u64).checked_mul(self.channels() as u64);
-        if !matches!(bytes, Some(b) if b <= isize::MAX as u64) {
-            return Err(Error::Parameter(format!(
-                "output size {width}×{height} does not fit in memory"
-            )));
+        let bytes = (width as u64 * height as u64).saturating_mul(self.channels() as u64);
+        if bytes > isize::MAX as u64 {
+            return Err(Error::OutOfMemory { bytes });
         }
         Ok(())
     }

@@ -135,7 +135,11 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
                 assert_eq!(a.image, b.image, "threads change the picture");
             }
             (Err(a), Err(b)) => {
-                assert_eq!(a.to_string(), b.to_string(), "threads change the error")
+                assert_eq!(
+                    format!("{a:?}"),
+                    format!("{b:?}"),
+                    "threads change the error"
+                )
             }
             (a, b) => panic!(
                 "threads change the outcome: {:?} vs {:?}",
@@ -164,7 +168,7 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
             assert_eq!(a.samples_verified, b.samples_verified);
             assert_eq!(a.image, b.image, "recovery changes a good decode");
         }
-        (Ok(_), Err(e)) => panic!("recovery fails where the strict decoder succeeds: {e}"),
+        (Ok(_), Err(e)) => panic!("recovery fails where the strict decoder succeeds: {e:?}"),
         (Err(Error::NeedMoreData), Ok(_)) => panic!("recovery decodes an incomplete header"),
         _ => {}
     }
@@ -230,14 +234,18 @@ pub fn push(data: &[u8]) {
         let r = dec.push(&file[pos..end]);
         pos = end;
         if failed {
-            assert!(r.is_err(), "push succeeds after an error");
+            assert!(
+                matches!(r, Err(Error::Poisoned { .. })),
+                "push after an error: {r:?}"
+            );
             continue;
         }
         if r.is_err() {
             failed = true;
+            let again = dec.push(&[]);
             assert!(
-                dec.push(&[]).is_err(),
-                "decoder not poisoned after an error"
+                matches!(again, Err(Error::Poisoned { .. })),
+                "decoder not poisoned after an error: {again:?}"
             );
             continue;
         }
@@ -285,7 +293,7 @@ pub fn push(data: &[u8]) {
                     assert_eq!(p.is_final(), all && dec.is_complete());
                 }
                 Err(Error::NeedMoreData) => assert!(dec.header().is_none()),
-                Err(e) => panic!("render failed after a good push: {e}"),
+                Err(e) => panic!("render failed after a good push: {e:?}"),
             }
         }
     }

@@ -10,16 +10,18 @@ use std::io::Read;
 /// Largest `.qcs` file [`QcsImageDecoder`] reads into memory (1 GiB).
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
 
+/// `image`'s error for `e`. `image` prints a decoding error as "Format error decoding qcs: "
+/// and the error it wraps: a format error is wrapped itself, since [`Error::Format`] would
+/// print only "malformed file".
 fn to_image_error(e: Error) -> ImageError {
+    let hint = || ImageFormatHint::Name("qcs".into());
     match e {
         Error::Io(e) => ImageError::IoError(e),
-        Error::Limits(_) => {
+        Error::Limits(_) | Error::OutOfMemory { .. } => {
             ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory))
         }
-        other => ImageError::Decoding(DecodingError::new(
-            ImageFormatHint::Name("qcs".into()),
-            other,
-        )),
+        Error::Format(e) => ImageError::Decoding(DecodingError::new(hint(), e)),
+        other => ImageError::Decoding(DecodingError::new(hint(), other)),
     }
 }
 

@@ -65,20 +65,45 @@ impl Default for Limits {
 #[non_exhaustive]
 pub enum LimitError {
     /// Width or height above `max_dimension`.
-    #[error("image dimension {0} exceeds the limit {1}")]
-    Dimension(u64, u64),
+    #[error("image dimension {value} exceeds the limit {limit}")]
+    Dimension {
+        /// The larger of width and height.
+        value: u64,
+        /// `max_dimension`.
+        limit: u64,
+    },
     /// Width × height above `max_image_pixels`.
-    #[error("image of {0} pixels exceeds the limit {1}")]
-    ImagePixels(u64, u64),
+    #[error("image of {value} pixels exceeds the limit {limit}")]
+    ImagePixels {
+        /// Width × height (saturated at `u64::MAX`).
+        value: u64,
+        /// `max_image_pixels`.
+        limit: u64,
+    },
     /// Output size above `max_output_pixels`.
-    #[error("output of {0} pixels exceeds the limit {1}")]
-    OutputPixels(u64, u64),
+    #[error("output of {value} pixels exceeds the limit {limit}")]
+    OutputPixels {
+        /// Width × height of the output (saturated at `u64::MAX`).
+        value: u64,
+        /// `max_output_pixels`.
+        limit: u64,
+    },
     /// Sample count above `max_samples`.
-    #[error("{0} samples exceed the limit {1}")]
-    Samples(u64, u64),
+    #[error("{value} samples exceed the limit {limit}")]
+    Samples {
+        /// The samples asked for.
+        value: u64,
+        /// `max_samples`.
+        limit: u64,
+    },
     /// Metadata above `max_metadata_bytes`.
-    #[error("{0} metadata bytes exceed the limit {1}")]
-    Metadata(u64, u64),
+    #[error("{value} metadata bytes exceed the limit {limit}")]
+    Metadata {
+        /// The metadata bytes, with the chunk that went over.
+        value: u64,
+        /// `max_metadata_bytes`.
+        limit: u64,
+    },
 }
 
 impl Limits {
@@ -97,11 +122,17 @@ impl Limits {
     pub fn check_image(&self, width: u64, height: u64) -> Result<(), LimitError> {
         let d = width.max(height);
         if d > self.max_dimension as u64 {
-            return Err(LimitError::Dimension(d, self.max_dimension as u64));
+            return Err(LimitError::Dimension {
+                value: d,
+                limit: self.max_dimension as u64,
+            });
         }
         let p = width.saturating_mul(height);
         if p > self.max_image_pixels {
-            return Err(LimitError::ImagePixels(p, self.max_image_pixels));
+            return Err(LimitError::ImagePixels {
+                value: p,
+                limit: self.max_image_pixels,
+            });
         }
         Ok(())
     }
@@ -110,7 +141,10 @@ impl Limits {
     pub fn check_output(&self, width: u64, height: u64) -> Result<(), LimitError> {
         let p = width.saturating_mul(height);
         if p > self.max_output_pixels {
-            return Err(LimitError::OutputPixels(p, self.max_output_pixels));
+            return Err(LimitError::OutputPixels {
+                value: p,
+                limit: self.max_output_pixels,
+            });
         }
         Ok(())
     }
@@ -118,7 +152,10 @@ impl Limits {
     /// Checks a sample count against `max_samples`.
     pub fn check_samples(&self, n: u64) -> Result<(), LimitError> {
         if n > self.max_samples {
-            return Err(LimitError::Samples(n, self.max_samples));
+            return Err(LimitError::Samples {
+                value: n,
+                limit: self.max_samples,
+            });
         }
         Ok(())
     }
@@ -126,7 +163,10 @@ impl Limits {
     /// Checks a metadata size against `max_metadata_bytes`.
     pub fn check_metadata(&self, n: u64) -> Result<(), LimitError> {
         if n > self.max_metadata_bytes {
-            return Err(LimitError::Metadata(n, self.max_metadata_bytes));
+            return Err(LimitError::Metadata {
+                value: n,
+                limit: self.max_metadata_bytes,
+            });
         }
         Ok(())
     }

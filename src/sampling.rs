@@ -90,7 +90,7 @@ pub struct SourceImage<'a> {
 impl<'a> SourceImage<'a> {
     /// Wraps `pixels` (`width × height × channels`, row-major, interleaved).
     ///
-    /// A buffer of another length, or an empty image, is [`crate::Error::Parameter`].
+    /// A buffer of another length, or an empty image, is [`crate::Error::InvalidArgument`].
     pub fn new(pixels: &'a [u8], width: u32, height: u32, channels: usize) -> crate::Result<Self> {
         let (w, h, c) = (width as usize, height as usize, channels);
         if w == 0
@@ -98,10 +98,14 @@ impl<'a> SourceImage<'a> {
             || c == 0
             || w.checked_mul(h).and_then(|p| p.checked_mul(c)) != Some(pixels.len())
         {
-            return Err(crate::Error::Parameter(format!(
-                "pixel buffer of {} bytes for a {width}×{height}×{channels} image",
-                pixels.len()
-            )));
+            return Err(crate::Error::invalid(
+                "pixel buffer",
+                format_args!(
+                    "{} bytes for a {width}×{height}×{channels} image",
+                    pixels.len()
+                ),
+                "width × height × channels bytes, none of them 0",
+            ));
         }
         let stride = (w + 1) * c;
         let mut sat = vec![0u32; (w + 1) * (h + 1) * c];

@@ -771,6 +771,9 @@ fn a_huge_file_is_refused_in_bounded_memory() {
     let (c, err) = code_of(qcs().args(["info", "--max-input", "none"]).arg(&long));
     assert_eq!(c, Some(3), "{err}");
     assert!(err.contains("CRC mismatch"), "{err}");
+    // Each part of the cause chain once: "… is damaged: malformed file: chunk … CRC mismatch …".
+    assert_eq!(err.matches("malformed file").count(), 1, "{err}");
+    assert_eq!(err.matches("CRC mismatch").count(), 1, "{err}");
     assert!(!png.exists());
 }
 
@@ -1057,6 +1060,33 @@ fn a_cut_header_is_a_grey_picture() {
     );
     assert_eq!(c, Some(0), "{err}");
     assert!(err.contains("neutral grey 1×1"), "{err}");
+}
+
+/// `qcs demo` of an image whose file is so small that its first 1 % ends inside the header:
+/// that preview is neutral grey, as `qcs decode` draws such a cut, not an error (it was exit
+/// 3, "malformed", from the library's `NeedMoreData`).
+#[test]
+fn a_demo_whose_first_cut_ends_inside_the_header_draws_grey() {
+    let png = scratch("demo-tiny.png");
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 100, 50]))
+        .save(&png)
+        .expect("save");
+    let dir = scratch("demo-tiny");
+    let out = run(qcs().arg("demo").arg(&png).arg(&dir));
+    let (text, err) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("malformed"), "{err}");
+    assert!(
+        text.contains("neutral grey: the bytes end inside the header"),
+        "{text}"
+    );
+    let first = image::open(dir.join("demo-tiny-001pct.png")).expect("a PNG");
+    assert!(first.to_rgb8().pixels().all(|p| p.0 == [128; 3]));
+    let whole = image::open(dir.join("demo-tiny-100pct.png")).expect("a PNG");
+    assert!(whole.to_rgb8().pixels().all(|p| p.0 != [128; 3]));
 }
 
 /// The number of frames in a GIF.

@@ -267,7 +267,7 @@ fn capped_decodes_need_only_their_levels_within_the_limits() {
     };
     assert!(matches!(
         decode(&bytes, &whole),
-        Err(Error::Limits(qcs::limits::LimitError::Samples(s, l))) if s == n && l == limit
+        Err(Error::Limits(qcs::limits::LimitError::Samples { value, limit: l })) if value == n && l == limit
     ));
     // Caps within the levels that fit, and one sample more (the last level).
     for (cap, fits) in [

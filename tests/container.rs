@@ -426,7 +426,7 @@ fn huge_claims_rejected_by_default_limits() {
     let bytes = h.encode().unwrap();
     let (p, ev, r) = parse_all(&bytes, Default::default());
     assert!(
-        matches!(r, Err(Error::Limits(LimitError::Dimension(..)))),
+        matches!(r, Err(Error::Limits(LimitError::Dimension { .. }))),
         "{r:?}"
     );
     assert!(ev.is_empty());
@@ -443,7 +443,7 @@ fn huge_claims_rejected_by_default_limits() {
     );
     let r = parse_all(&h.encode().unwrap(), Default::default()).2;
     assert!(
-        matches!(r, Err(Error::Limits(LimitError::Samples(..)))),
+        matches!(r, Err(Error::Limits(LimitError::Samples { .. }))),
         "{r:?}"
     );
 
@@ -723,7 +723,11 @@ fn recovery_keeps_longest_verified_prefix() {
             .contains(&format!("chunk #4 'L' at byte {off}")),
         "{e}"
     );
-    assert!(matches!(p.push(&[], &mut ev), Err(Error::Parameter(_))));
+    // Poisoned: the first error is the one to report.
+    assert!(matches!(
+        p.push(&[], &mut ev),
+        Err(Error::Poisoned { object: "Parser" })
+    ));
     assert_eq!(p.end_state(), EndState::Failed);
     // Events before the error were still delivered.
     assert!(ev.contains(&Event::LevelVerified {
@@ -862,7 +866,13 @@ fn metadata_limit() {
     limits.max_metadata_bytes = 10; // the text chunk has 11 bytes
     let (_, ev, r) = parse_all(&file, limits.into());
     assert!(
-        matches!(r, Err(Error::Limits(LimitError::Metadata(11, 10)))),
+        matches!(
+            r,
+            Err(Error::Limits(LimitError::Metadata {
+                value: 11,
+                limit: 10
+            }))
+        ),
         "{r:?}"
     );
     assert!(ev

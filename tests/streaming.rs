@@ -425,3 +425,29 @@ fn previews_end_at_a_render_error() {
         }
     }
 }
+
+/// A decoder that returned an error is poisoned: feeding it again is `Error::Poisoned`, not
+/// the damage a second time (the first error is the one to report), nor a success.
+#[test]
+fn a_failed_decoder_is_poisoned() {
+    let mut bytes = file();
+    bytes[0] = b'Q';
+    let mut dec = StreamDecoder::new(Limits::default());
+    assert!(matches!(dec.push(&bytes), Err(Error::Format(_))));
+    for more in [&[][..], &bytes[..]] {
+        let e = dec.push(more).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::Poisoned {
+                    object: "StreamDecoder"
+                }
+            ),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            "StreamDecoder used again after it returned an error"
+        );
+    }
+}

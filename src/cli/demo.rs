@@ -71,18 +71,28 @@ pub fn demo(a: DemoArgs, ctx: &Ctx) -> Result<()> {
                 max_bytes: Some(cut),
                 ..Default::default()
             },
-        )?;
-        let rgb = d.image.to_rgb8();
+        );
+        // A small file's first 1 % can end inside the header: nothing to show yet, a neutral
+        // grey picture, as `qcs decode` draws it.
+        let (rgb, samples, said) = match d {
+            Ok(d) => (d.image.to_rgb8(), d.samples_used, ""),
+            Err(qcs::Error::NeedMoreData) => (
+                image::RgbImage::from_pixel(w, h, image::Rgb([128; 3])),
+                0,
+                "  (neutral grey: the bytes end inside the header)",
+            ),
+            Err(e) => return Err(e.into()),
+        };
         let path = a.out_dir.join(format!("{stem}-{pct:03}pct.png"));
         rgb.save(&path)
             .with_context(|| format!("cannot write {}", path.display()))?;
         image::imageops::replace(&mut strip, &rgb, (i as u32 * w) as i64, 0);
         if !quiet {
             note!(
-                "{:>6}% {:>8} {:>8} {:>8.2}  {}",
+                "{:>6}% {:>8} {:>8} {:>8.2}  {}{said}",
                 pct,
                 cut,
-                d.samples_used,
+                samples,
                 qcs::eval::psnr(&reference, &rgb)?,
                 path.display()
             );

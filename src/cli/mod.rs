@@ -205,8 +205,12 @@ fn exit_code(e: &anyhow::Error) -> u8 {
         }
         if let Some(q) = cause.downcast_ref::<qcs::Error>() {
             return match q {
-                qcs::Error::Format(_) | qcs::Error::NeedMoreData => 3,
+                qcs::Error::Format(_) => 3,
                 qcs::Error::Limits(_) => 4,
+                // A file cut inside its header is not malformed (README: a neutral grey
+                // picture, exit 0) and every command draws it so: this reaching here is qcs's
+                // own failure, not the input's.
+                qcs::Error::NeedMoreData => 1,
                 _ => 1,
             };
         }
@@ -246,8 +250,9 @@ pub fn main() -> ExitCode {
         // The reader went away (`qcs sites … | head`): nothing more to say, as for `yes`.
         Err(e) if closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            // `{e:#}` repeats a cause whose parent already prints it (`thiserror`'s
-            // "malformed file: {0}" with `#[from]`, the image crate's errors): skip those.
+            // The cause chain, each message once: `qcs::Error` prints only its own part
+            // ("malformed file") and leaves the rest to its source, but the image crate's
+            // errors also print their source, which `{e:#}` would then repeat: skip those.
             let mut msg = String::new();
             for cause in e.chain() {
                 let s = cause.to_string();

@@ -528,10 +528,10 @@ struct State {
 impl State {
     fn new(params: Params, channels: u8, width: u32, height: u32) -> Result<Self, Error> {
         if !(1..=4).contains(&channels) {
-            return Err(Error::Parameter(format!("{channels} channels")));
+            return Err(Error::invalid("channels", channels, "1..=4"));
         }
         if params.step == 0 {
-            return Err(Error::Parameter("predictive step 0".into()));
+            return Err(Error::invalid("predictive step", 0, "1..=255"));
         }
         let c = channels as usize;
         Ok(State {
@@ -628,11 +628,15 @@ impl PredictiveEncoder {
     ) -> Result<Vec<u8>, Error> {
         let c = self.state.layout_channels;
         if colours.len() != positions.len() * c {
-            return Err(Error::Parameter(format!(
-                "{} colour values for {} samples of {c} channels",
-                colours.len(),
-                positions.len()
-            )));
+            return Err(Error::invalid(
+                "colours",
+                format_args!("{} values", colours.len()),
+                format!(
+                    "{} for {} samples of {c} channels",
+                    positions.len() * c,
+                    positions.len()
+                ),
+            ));
         }
         self.state.pred.begin_level(positions);
         let mut rc = RangeEncoder::new();
@@ -705,8 +709,9 @@ impl PredictiveDecoder {
     /// order) of every sample completed to `out` and returns how many were.
     pub fn push(&mut self, bytes: &[u8], out: &mut Vec<u8>) -> Result<u64, Error> {
         let Some(level) = &mut self.level else {
-            return Err(Error::Parameter(
-                "payload bytes before a level start".into(),
+            return Err(Error::misuse(
+                "PredictiveDecoder::push",
+                "payload bytes before a level begins",
             ));
         };
         let room = level.payload_len.saturating_sub(level.payload.len());

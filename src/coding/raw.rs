@@ -19,12 +19,10 @@ use bitvec::prelude::*;
 
 fn check(channels: u8, bits: u8) -> Result<(), crate::Error> {
     if !(1..=8).contains(&bits) {
-        return Err(crate::Error::Parameter(format!(
-            "raw coding bits per channel {bits} outside 1..=8"
-        )));
+        return Err(crate::Error::invalid("raw bits per channel", bits, "1..=8"));
     }
     if channels == 0 {
-        return Err(crate::Error::Parameter("zero channels".into()));
+        return Err(crate::Error::invalid("channels", 0, "at least 1"));
     }
     Ok(())
 }

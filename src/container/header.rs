@@ -481,8 +481,16 @@ impl Header {
     /// # Ok::<(), qcs::Error>(())
     /// ```
     pub fn encode(&self) -> Result<Vec<u8>, crate::Error> {
-        self.validate()
-            .map_err(|e| crate::Error::Parameter(format!("invalid header: {e}")))?;
+        // A header to write is the caller's: a field the format forbids is a bad argument.
+        self.validate().map_err(|e| match e {
+            FormatError::InvalidField {
+                field,
+                value,
+                expected,
+                ..
+            } => crate::Error::invalid("header", format_args!("{field} = {value}"), expected),
+            other => crate::Error::invalid("header", other, "a header the format allows"),
+        })?;
         let mut out = Vec::with_capacity(16);
         out.extend_from_slice(&MAGIC);
         let lattice = if self.lattice.is_some() {

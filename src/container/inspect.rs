@@ -332,7 +332,15 @@ impl std::fmt::Display for Inspection {
             self.samples_verified, self.samples_available, self.end
         )?;
         if let Some(e) = &self.error {
-            writeln!(f, "error: {e}")?;
+            // The error and its causes ("malformed file: chunk #2 …"): `Error` prints only
+            // its own part.
+            write!(f, "error: {e}")?;
+            let mut cause = std::error::Error::source(e);
+            while let Some(c) = cause {
+                write!(f, ": {c}")?;
+                cause = c.source();
+            }
+            writeln!(f)?;
         }
         Ok(())
     }

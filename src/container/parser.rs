@@ -478,16 +478,12 @@ impl Parser {
     /// Consumes `input` (any length, including 0) and appends the events it completes to `events`.
     ///
     /// "Not enough bytes yet" is never an error. Events found before an error are still appended.
-    /// A format error fails (and poisons the parser) unless recovery is on and the header is
-    /// complete, in which case [`Event::Stopped`] is appended and `Ok` returned; a limit error
-    /// always fails.
+    /// A format error fails (and poisons the parser: every later push is
+    /// [`crate::Error::Poisoned`]) unless recovery is on and the header is complete, in which
+    /// case [`Event::Stopped`] is appended and `Ok` returned; a limit error always fails.
     pub fn push(&mut self, input: &[u8], events: &mut Vec<Event>) -> Result<(), crate::Error> {
         match self.state {
-            State::Poisoned => {
-                return Err(crate::Error::Parameter(
-                    "qcs parser used after a fatal error".into(),
-                ))
-            }
+            State::Poisoned => return Err(crate::Error::Poisoned { object: "Parser" }),
             State::Stopped => return Ok(()),
             _ => {}
         }

@@ -1,6 +1,7 @@
 //! Writing a `.qcs` file to any [`std::io::Write`].
 
 use super::chunk::{self, ICC, LEVEL, REFINEMENT, TEXT};
+use super::refinement::Bad;
 use super::{encode_layer, Header, RefinementHeader};
 use std::io::Write;
 
@@ -74,11 +75,7 @@ impl<W: Write> ContainerWriter<W> {
 
     /// Writes a chunk's bytes (`None`: its payload was too long for the length field).
     fn put(&mut self, bytes: Option<Vec<u8>>, payload_len: usize) -> Result<(), crate::Error> {
-        let bytes = bytes.ok_or_else(|| {
-            crate::Error::Parameter(format!(
-                "chunk payload of {payload_len} bytes exceeds 2^32 − 1"
-            ))
-        })?;
+        let bytes = bytes.ok_or_else(|| too_long(payload_len))?;
         self.inner.write_all(&bytes)?;
         self.written += bytes.len() as u64;
         Ok(())
@@ -89,17 +86,18 @@ impl<W: Write> ContainerWriter<W> {
     pub fn write_level(&mut self, payload: &[u8]) -> Result<(), crate::Error> {
         let k = self.next_level;
         if k >= self.level_count {
-            return Err(crate::Error::Parameter(format!(
-                "all {} levels already written",
-                self.level_count
-            )));
+            return Err(crate::Error::misuse(
+                "ContainerWriter::write_level",
+                format!("all {} levels are written already", self.level_count),
+            ));
         }
         if let Some(expected) = self.header.level_payload_len(k) {
             if expected != payload.len() as u64 {
-                return Err(crate::Error::Parameter(format!(
-                    "level {k} payload is {} bytes, the header implies {expected}",
-                    payload.len()
-                )));
+                return Err(crate::Error::invalid(
+                    "level payload",
+                    format_args!("{} bytes", payload.len()),
+                    format!("the {expected} bytes the header implies for level {k}"),
+                ));
             }
         }
         let bytes = if k == 0 {
@@ -126,42 +124,60 @@ impl<W: Write> ContainerWriter<W> {
         segments: &[&[u8]],
     ) -> Result<(), crate::Error> {
         if !self.header.refinement {
-            return Err(crate::Error::Parameter(
-                "a refinement layer in a file whose header has none (version 2)".into(),
+            return Err(crate::Error::misuse(
+                "ContainerWriter::write_layer",
+                "the header has no refinement (version 2)",
             ));
         }
         if self.next_level < self.level_count {
-            return Err(crate::Error::Parameter(
-                "a refinement layer before the last level".into(),
+            return Err(crate::Error::misuse(
+                "ContainerWriter::write_layer",
+                format!(
+                    "a layer before the last level ({} of {} levels written)",
+                    self.next_level, self.level_count
+                ),
             ));
         }
         if segments.len() > header.streams() {
-            return Err(crate::Error::Parameter(format!(
-                "{} segments for {} streams",
+            return Err(crate::Error::invalid(
+                "segments",
                 segments.len(),
-                header.streams()
-            )));
+                format!("at most one per stream: {}", header.streams()),
+            ));
         }
         let first = match &self.refinement {
             None => {
                 header
                     .validate(self.header.layout.channels() as usize)
-                    .map_err(|_| crate::Error::Parameter("invalid refinement header".into()))?;
+                    .map_err(|e| match e {
+                        Bad::Field(field, value, expected) => crate::Error::invalid(
+                            "refinement header",
+                            format_args!("{field} = {value}"),
+                            expected,
+                        ),
+                        Bad::Varint(field, e) => crate::Error::invalid(
+                            "refinement header",
+                            format_args!("{field}: {e}"),
+                            "a header the format allows",
+                        ),
+                    })?;
                 self.refinement = Some(header.clone());
                 true
             }
             Some(h) if h == header => false,
             Some(_) => {
-                return Err(crate::Error::Parameter(
-                    "a later layer with another refinement header".into(),
+                return Err(crate::Error::invalid(
+                    "refinement header",
+                    "another than the first layer's",
+                    "the first layer's: a file has one",
                 ))
             }
         };
         if self.layers_written >= header.layers {
-            return Err(crate::Error::Parameter(format!(
-                "all {} layers already written",
-                header.layers
-            )));
+            return Err(crate::Error::misuse(
+                "ContainerWriter::write_layer",
+                format!("all {} layers are written already", header.layers),
+            ));
         }
         let payload = encode_layer(first.then_some(header), segments);
         self.put(chunk::encode(REFINEMENT, &payload), payload.len())?;
@@ -173,23 +189,23 @@ impl<W: Write> ContainerWriter<W> {
     /// (0x20) set; the payload is written as given. At most one ICC (`i`) chunk.
     pub fn write_ancillary(&mut self, tag: u8, payload: &[u8]) -> Result<(), crate::Error> {
         if !chunk::is_ancillary(tag) {
-            return Err(crate::Error::Parameter(format!(
-                "tag {} is not ancillary",
-                chunk::tag_name(tag)
-            )));
+            return Err(crate::Error::invalid(
+                "chunk tag",
+                chunk::tag_name(tag),
+                "an ancillary tag (bit 0x20 set)",
+            ));
         }
         if tag == ICC {
             if self.icc_written {
-                return Err(crate::Error::Parameter(
-                    "a file holds at most one ICC profile".into(),
+                return Err(crate::Error::misuse(
+                    "ContainerWriter::write_icc",
+                    "an ICC profile is written already: a file holds at most one",
                 ));
             }
             self.icc_written = true;
         }
         if self.next_level == 0 {
-            let bytes = chunk::encode(tag, payload).ok_or_else(|| {
-                crate::Error::Parameter("chunk payload exceeds 2^32 − 1 bytes".into())
-            })?;
+            let bytes = chunk::encode(tag, payload).ok_or_else(|| too_long(payload.len()))?;
             self.pending.push(bytes);
             Ok(())
         } else {
@@ -205,8 +221,10 @@ impl<W: Write> ContainerWriter<W> {
     /// Writes a text chunk (`t`): `key` (non-empty, no 0x00), 0x00, `value`.
     pub fn write_text(&mut self, key: &str, value: &str) -> Result<(), crate::Error> {
         if key.is_empty() || key.contains('\0') {
-            return Err(crate::Error::Parameter(
-                "text key must be non-empty and contain no NUL".into(),
+            return Err(crate::Error::invalid(
+                "text key",
+                format_args!("{key:?}"),
+                "a non-empty key without NUL",
             ));
         }
         let mut payload = Vec::with_capacity(key.len() + 1 + value.len());
@@ -222,18 +240,25 @@ impl<W: Write> ContainerWriter<W> {
     /// [`ContainerWriter::into_inner`].
     pub fn finish(mut self) -> Result<W, crate::Error> {
         if self.next_level < self.level_count {
-            return Err(crate::Error::Parameter(format!(
-                "only {} of {} levels written",
-                self.next_level, self.level_count
-            )));
+            return Err(crate::Error::misuse(
+                "ContainerWriter::finish",
+                format!(
+                    "only {} of {} levels written (into_inner stops early on purpose)",
+                    self.next_level, self.level_count
+                ),
+            ));
         }
         if self.header.refinement {
             let want = self.refinement.as_ref().map_or(1, |r| r.layers);
             if self.layers_written < want {
-                return Err(crate::Error::Parameter(format!(
-                    "only {} of {want} refinement layers written",
-                    self.layers_written
-                )));
+                return Err(crate::Error::misuse(
+                    "ContainerWriter::finish",
+                    format!(
+                        "only {} of {want} refinement layers written (into_inner stops early \
+                         on purpose)",
+                        self.layers_written
+                    ),
+                ));
             }
         }
         self.inner.flush()?;
@@ -244,4 +269,13 @@ impl<W: Write> ContainerWriter<W> {
     pub fn into_inner(self) -> W {
         self.inner
     }
+}
+
+/// A chunk payload longer than the length field holds: the caller's data is too long.
+fn too_long(payload_len: usize) -> crate::Error {
+    crate::Error::invalid(
+        "chunk payload",
+        format_args!("{payload_len} bytes"),
+        "at most 2^32 − 1 bytes",
+    )
 }

@@ -66,9 +66,9 @@ impl RawDecoder {
     /// not raw fails with [`FormatError::UnsupportedCoding`].
     pub fn push(&mut self, bytes: &[u8]) -> Result<(), crate::Error> {
         if self.unsupported {
-            return Err(crate::Error::Parameter(
-                "qcs raw decoder used after an unsupported-coding error".into(),
-            ));
+            return Err(crate::Error::Poisoned {
+                object: "RawDecoder",
+            });
         }
         let result = self.parser.push(bytes, &mut self.events);
         for ev in std::mem::take(&mut self.events) {

@@ -7,7 +7,7 @@ use crate::coding::predictive::Params;
 use crate::container::{Coding, ContainerWriter, Header, LatticeFields, Layout, Wavelet};
 use crate::refinement::encode::{self as refine, Goal};
 use crate::sampling::{SampleColour, SourceImage};
-use crate::sites::{Frame, Quasicrystal};
+use crate::sites::{Frame, FrameError, Quasicrystal};
 use crate::{Error, Result};
 use image::DynamicImage;
 use std::borrow::Cow;
@@ -171,17 +171,34 @@ pub fn encode(image: &DynamicImage, opts: &EncodeOptions) -> Result<Vec<u8>> {
     Ok(out)
 }
 
+/// The caller's image size or [`EncodeOptions::frame`] that the site construction cannot use.
+fn frame_error(e: FrameError) -> Error {
+    match e {
+        FrameError::RootLength { root_len } => Error::invalid(
+            "EncodeOptions::frame root length",
+            format_args!("{root_len}/65536 px"),
+            "65536..=16777216 (1 to 256 px)",
+        ),
+        FrameError::Size { width, height } => Error::invalid(
+            "image size",
+            format_args!("{width}×{height}"),
+            "1..=65535 pixels on each side",
+        ),
+    }
+}
+
 /// Encodes an image to any writer.
 pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W) -> Result<()> {
     let (width, height) = (image.width(), image.height());
     let frame = opts
         .frame
         .unwrap_or_else(|| Frame::default_for(width, height));
-    let seq = Quasicrystal::with_frame(width, height, frame)
-        .map_err(|e| Error::Parameter(e.to_string()))?;
+    let seq = Quasicrystal::with_frame(width, height, frame).map_err(frame_error)?;
     if opts.first_level == 0 {
-        return Err(Error::Parameter(
-            "the first level must hold at least one sample".into(),
+        return Err(Error::invalid(
+            "EncodeOptions::first_level",
+            0,
+            "at least 1 sample",
         ));
     }
     let refined = opts.target != Target::LevelsOnly;

@@ -58,7 +58,7 @@ pub(crate) fn samples_before_refinement(
     if parea < FIRST_LEVEL << 2 {
         return Ok(FIRST_LEVEL.min(area));
     }
-    let seq = Quasicrystal::new(pw, ph).map_err(|e| crate::Error::Parameter(e.to_string()))?;
+    let seq = Quasicrystal::new(pw, ph).map_err(super::frame_error)?;
     let source = SourceImage::new(&proxy, pw, ph, channels)?;
     let t = refine::transform(
         &proxy,

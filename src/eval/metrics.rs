@@ -7,11 +7,11 @@ use crate::{Error, Result};
 /// channels). Identical buffers give `f64::INFINITY`.
 pub fn psnr_bytes(a: &[u8], b: &[u8]) -> Result<f64> {
     if a.len() != b.len() || a.is_empty() {
-        return Err(Error::Parameter(format!(
-            "psnr of buffers of {} and {} bytes",
-            a.len(),
-            b.len()
-        )));
+        return Err(Error::invalid(
+            "buffers",
+            format_args!("{} and {} bytes", a.len(), b.len()),
+            "two of the same non-zero length",
+        ));
     }
     let sse: u64 = a
         .iter()
@@ -31,11 +31,11 @@ pub fn psnr_bytes(a: &[u8], b: &[u8]) -> Result<f64> {
 /// PSNR of two RGB images of the same size; see [`psnr_bytes`].
 pub fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> Result<f64> {
     if a.dimensions() != b.dimensions() {
-        return Err(Error::Parameter(format!(
-            "psnr of images of sizes {:?} and {:?}",
-            a.dimensions(),
-            b.dimensions()
-        )));
+        return Err(Error::invalid(
+            "images",
+            format_args!("{:?} and {:?}", a.dimensions(), b.dimensions()),
+            "two of the same size",
+        ));
     }
     psnr_bytes(a.as_raw(), b.as_raw())
 }

@@ -164,7 +164,11 @@ pub fn reconstruction_psnr(
     method: Method,
 ) -> Result<f64> {
     if colours.len() != sites.len() * 3 {
-        return Err(Error::Parameter("3 colour bytes per site needed".into()));
+        return Err(Error::invalid(
+            "colours",
+            format_args!("{} bytes for {} sites", colours.len(), sites.len()),
+            "3 bytes per site",
+        ));
     }
     let (w, h) = img.dimensions();
     let out = reconstruction::render((w, h), 3, sites, colours, method, w, h);
@@ -203,15 +207,21 @@ pub fn run(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Report> {
     if images.is_empty() || samplers.is_empty() {
-        return Err(Error::Parameter(
-            "eval needs at least one image and one sampler".into(),
+        return Err(Error::invalid(
+            "images and samplers",
+            format_args!("{} images, {} samplers", images.len(), samplers.len()),
+            "at least one of each",
         ));
     }
     if let Some((name, _)) = images
         .iter()
         .find(|(_, i)| i.width() == 0 || i.height() == 0)
     {
-        return Err(Error::Parameter(format!("image {name} is empty")));
+        return Err(Error::invalid(
+            "image",
+            format_args!("{name}, empty"),
+            "at least 1×1 pixels",
+        ));
     }
     let limits = crate::Limits::default();
     let mut counts: Vec<usize> = options
@@ -226,8 +236,10 @@ pub fn run(
     let max_count = counts.last().copied().unwrap_or(0);
     limits.check_samples(max_count as u64)?;
     if options.panel_size == 0 || options.spectrum_size < 2 {
-        return Err(Error::Parameter(
-            "panel_size must be > 0 and spectrum_size ≥ 2".into(),
+        return Err(Error::invalid(
+            "EvalOptions panel_size, spectrum_size",
+            format_args!("{}, {}", options.panel_size, options.spectrum_size),
+            "panel_size ≥ 1 and spectrum_size ≥ 2",
         ));
     }
     std::fs::create_dir_all(out_dir)?;

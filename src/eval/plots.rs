@@ -162,7 +162,7 @@ pub(crate) fn curves(
         series,
     )?;
     image::RgbImage::from_raw(900, 560, buf)
-        .ok_or_else(|| crate::Error::Parameter("plot buffer size".into()))?
+        .expect("the buffer is 900 × 560 × 3 bytes")
         .save(png)
         .map_err(|e| crate::Error::Io(std::io::Error::other(e)))?;
     Ok(())

@@ -311,15 +311,19 @@ impl SampleSet {
         colour: &[u8],
     ) -> crate::Result<()> {
         if !crate::lattice::within_exact_limit(lattice) {
-            return Err(crate::Error::Parameter(format!(
-                "lattice point {lattice:?} is beyond the exact range"
-            )));
+            return Err(crate::Error::invalid(
+                "lattice point",
+                format_args!("{lattice:?}"),
+                "a point within the exact range (lattice::within_exact_limit)",
+            ));
         }
         let at = self.lines.frame().position(lattice);
         if (at[0] - pos[0]).abs() > 1e-6 || (at[1] - pos[1]).abs() > 1e-6 {
-            return Err(crate::Error::Parameter(format!(
-                "lattice point {lattice:?} is at {at:?} in this set's frame, not at {pos:?}"
-            )));
+            return Err(crate::Error::invalid(
+                "sample position",
+                format_args!("{pos:?}"),
+                format!("{at:?}, where lattice point {lattice:?} is in this set's frame"),
+            ));
         }
         self.push_inner(pos, Some(lattice), colour)
     }
@@ -331,9 +335,11 @@ impl SampleSet {
         colour: &[u8],
     ) -> crate::Result<()> {
         let Some(p) = mesh::sanitize(pos) else {
-            return Err(crate::Error::Parameter(format!(
-                "sample position {pos:?} is not usable"
-            )));
+            return Err(crate::Error::invalid(
+                "sample position",
+                format_args!("{pos:?}"),
+                "finite coordinates within the triangulation's range",
+            ));
         };
         let k = self.positions.len();
         self.positions.push(p);

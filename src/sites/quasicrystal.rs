@@ -31,13 +31,22 @@ pub struct Frame {
 
 /// Why a frame or image size cannot be used for the site construction.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum FrameError {
     /// Width or height is 0 or above 65535.
-    #[error("image size {0}×{1} is outside 1..=65535")]
-    Size(u32, u32),
+    #[error("image size {width}×{height} is outside 1..=65535")]
+    Size {
+        /// The width asked for.
+        width: u32,
+        /// The height asked for.
+        height: u32,
+    },
     /// Root length outside 1..=256 px.
-    #[error("root length {0}/65536 px is outside [1, 256] px")]
-    RootLength(u32),
+    #[error("root length {root_len}/65536 px is outside [1, 256] px")]
+    RootLength {
+        /// The root length asked for, 16.16 fixed point.
+        root_len: u32,
+    },
 }
 
 impl Frame {
@@ -55,10 +64,12 @@ impl Frame {
     /// Checks the bounds that keep every integer of the construction in range.
     pub fn validate(&self, width: u32, height: u32) -> Result<(), FrameError> {
         if width == 0 || height == 0 || width > 65535 || height > 65535 {
-            return Err(FrameError::Size(width, height));
+            return Err(FrameError::Size { width, height });
         }
         if (self.root_len as i64) < FX_ONE || self.root_len as i64 > 256 * FX_ONE {
-            return Err(FrameError::RootLength(self.root_len));
+            return Err(FrameError::RootLength {
+                root_len: self.root_len,
+            });
         }
         Ok(())
     }

@@ -8,7 +8,7 @@
 //! pixel `(i, j)` shows the source point `((i + ½)·W/w, (j + ½)·H/h)`.
 //! Inputs are validated: colour buffers of the wrong length, empty sizes,
 //! non-finite positions or outputs over [`crate::Limits::default`]'s
-//! `max_output_pixels` give [`crate::Error::Parameter`] / [`crate::Error::Limits`].
+//! `max_output_pixels` give [`crate::Error::InvalidArgument`] / [`crate::Error::Limits`].
 //!
 //! The cell-based styles (mosaic, strokes, the Delaunay wireframe) draw the cells of
 //! [`Triangulation::cells`]: the canonical Delaunay cells, cocircular triangles merged into
@@ -153,8 +153,7 @@ impl Triangulation {
                 })
                 .collect();
             let points: Vec<Option<ZZeta>> = lattice.iter().copied().map(Some).collect();
-            let mesh = Mesh::bulk_load_stable(vertices)
-                .map_err(|e| Error::Parameter(format!("triangulation failed: {e}")))?;
+            let mesh = Mesh::bulk_load_stable(vertices).map_err(refused)?;
             t.exact = Cells::build(&mesh, &points).map(|c| {
                 c.iter()
                     .map(|c| c.iter().map(|&i| i as usize).collect())
@@ -181,11 +180,14 @@ impl Triangulation {
             .collect();
         for s in &sites {
             spade::validate_vertex(s).map_err(|e| {
-                Error::Parameter(format!("site {} {:?}: {e}", s.index, positions[s.index]))
+                Error::invalid(
+                    "site position",
+                    format_args!("{:?} (site {}: {e})", positions[s.index], s.index),
+                    "finite coordinates within spade's range",
+                )
             })?;
         }
-        let mesh = DelaunayTriangulation::bulk_load(sites)
-            .map_err(|e| Error::Parameter(format!("triangulation failed: {e}")))?;
+        let mesh = DelaunayTriangulation::bulk_load(sites).map_err(refused)?;
         Ok(Triangulation { mesh, exact: None })
     }
 
@@ -318,6 +320,15 @@ fn circle(p: [Point2<f64>; 3]) -> ([f64; 2], f64) {
     ([ax + ux, ay + uy], (ux * ux + uy * uy).sqrt())
 }
 
+/// Sites the triangulation refused.
+fn refused(e: spade::InsertionError) -> Error {
+    Error::invalid(
+        "site positions",
+        format_args!("refused by the triangulation ({e})"),
+        "finite coordinates within spade's range",
+    )
+}
+
 /// Checks the common inputs of the renderers.
 pub(crate) fn check(
     positions: &[Point],
@@ -326,26 +337,38 @@ pub(crate) fn check(
     output: (u32, u32),
 ) -> Result<()> {
     if source.0 == 0 || source.1 == 0 {
-        return Err(Error::Parameter(format!("empty source size {source:?}")));
+        return Err(Error::invalid(
+            "source size",
+            format_args!("{}×{}", source.0, source.1),
+            "at least 1×1",
+        ));
     }
     if output.0 == 0 || output.1 == 0 {
-        return Err(Error::Parameter(format!("empty output size {output:?}")));
+        return Err(Error::invalid(
+            "output size",
+            format_args!("{}×{}", output.0, output.1),
+            "at least 1×1",
+        ));
     }
     crate::Limits::default().check_output(output.0 as u64, output.1 as u64)?;
     if let Some(c) = colours {
         if c.len() != positions.len().saturating_mul(3) {
-            return Err(Error::Parameter(format!(
-                "{} colour bytes for {} sites (need 3 per site)",
-                c.len(),
-                positions.len()
-            )));
+            return Err(Error::invalid(
+                "colours",
+                format_args!("{} bytes for {} sites", c.len(), positions.len()),
+                "3 bytes per site",
+            ));
         }
     }
     if let Some(p) = positions
         .iter()
         .find(|p| !p[0].is_finite() || !p[1].is_finite())
     {
-        return Err(Error::Parameter(format!("non-finite site {p:?}")));
+        return Err(Error::invalid(
+            "site position",
+            format_args!("{p:?}"),
+            "finite coordinates",
+        ));
     }
     Ok(())
 }

@@ -40,7 +40,11 @@ impl PhaseWindow {
         if ok {
             Ok(())
         } else {
-            Err(Error::Parameter(format!("bad phase window {self:?}")))
+            Err(Error::invalid(
+                "phase window",
+                format_args!("{self:?}"),
+                "finite bounds with x1 > x0 and y1 > y0",
+            ))
         }
     }
     fn contains(&self, z: [f64; 2]) -> bool {
@@ -78,7 +82,11 @@ pub fn phase_value(z: [f64; 2]) -> f64 {
 
 fn check_size(size: (u32, u32)) -> Result<()> {
     if size.0 == 0 || size.1 == 0 {
-        return Err(Error::Parameter(format!("empty output size {size:?}")));
+        return Err(Error::invalid(
+            "output size",
+            format_args!("{}×{}", size.0, size.1),
+            "at least 1×1",
+        ));
     }
     crate::Limits::default().check_output(size.0 as u64, size.1 as u64)?;
     Ok(())
@@ -137,7 +145,7 @@ fn roots() -> [[f64; 2]; 10] {
 pub fn phase_sites(window: PhaseWindow, threshold: f64, max_sites: usize) -> Result<Vec<[f64; 2]>> {
     window.check()?;
     if !threshold.is_finite() {
-        return Err(Error::Parameter(format!("threshold {threshold}")));
+        return Err(Error::invalid("threshold", threshold, "a finite number"));
     }
     // ζ^j in the basis 1, ζ, ζ², ζ³ of Z[ζ] with ζ = e^{2πi/5}; the tenth roots are ±ζ^k
     // (e^{iπ/5·j}: j even → ζ^{j/2}, j odd → −ζ^{(j+5)/2 mod 5}).

@@ -25,9 +25,7 @@ const MAX_N: usize = 2048;
 pub fn power_spectrum(positions: &[Point], source: (u32, u32), n: usize) -> Result<Vec<f64>> {
     check(positions, None, source, (1, 1))?;
     if !(2..=MAX_N).contains(&n) {
-        return Err(Error::Parameter(format!(
-            "spectrum size {n} not in 2..={MAX_N}"
-        )));
+        return Err(Error::invalid("spectrum size", n, format!("2..={MAX_N}")));
     }
     let mut grid = vec![Complex::new(0.0f64, 0.0); n * n];
     for p in positions {
