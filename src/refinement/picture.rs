@@ -9,7 +9,9 @@
 use super::bitplane::{BandState, StreamState};
 use super::resample::Axis;
 use super::schedule::Orient;
-use super::wavelet::{inverse, low_size, synthesise_rows, Kernel};
+use super::wavelet::{
+    inverse, inverse_but_rows, inverse_row_into, low_size, synthesise_rows, Kernel,
+};
 use rayon::prelude::*;
 use std::borrow::Borrow;
 
@@ -178,15 +180,16 @@ fn channel_plane<B: Borrow<BandState>>(
 fn draw<B: Borrow<BandState> + Send>(src: &Source, stop: u32, bands: Vec<Vec<B>>) -> Vec<u8> {
     let stop = stop.min(src.levels);
     let (w, h) = low_size(src.width, src.height, stop);
+    // The low-low band of level `stop` is an image of its own, of levels − stop levels.
+    let levels = src.levels - stop;
     let planes: Vec<Vec<i32>> = (bands.into_par_iter().enumerate())
         .map(|(c, bands)| {
             let mut p = channel_plane(src, c, bands, w, h);
-            // The low-low band of level `stop` is an image of its own, of levels − stop levels.
-            inverse(src.kernel, &mut p, w, h, src.levels - stop, 0);
+            inverse_but_rows(src.kernel, &mut p, w, h, levels);
             p
         })
         .collect();
-    interleave(src, stop, &planes, w * h)
+    interleave(src, stop, &planes, w, (levels > 0).then_some(src.kernel))
 }
 
 /// A thumbnail of `tw × th` (informative): the picture with the bands finer than level
@@ -214,7 +217,7 @@ pub(crate) fn thumbnail(
             transpose(&columns, th)
         })
         .collect();
-    interleave(src, 0, &planes, tw * th)
+    interleave(src, 0, &planes, tw, None)
 }
 
 /// The transpose of `m`, rows of `w` values.
@@ -267,26 +270,64 @@ impl Normalise {
 /// normalised into a buffer on the stack, then converted together.
 const RUN: usize = 256;
 
-/// Coded channel planes of `n` values each, of the picture of level `level` → interleaved
-/// layout pixels.
-fn interleave(src: &Source, level: u32, planes: &[Vec<i32>], n: usize) -> Vec<u8> {
-    fn pixels<const N: usize>(planes: &[Vec<i32>], norm: Normalise, out: &mut [u8]) {
-        let mut coded = [[0i32; RUN]; N];
-        for (k, px) in out.chunks_mut(N * RUN).enumerate() {
-            let len = px.len() / N;
-            for (c, v) in coded.iter_mut().enumerate() {
-                norm.apply(&planes[c][k * RUN..k * RUN + len], &mut v[..len]);
-            }
-            layout_run::<N>(&coded, px);
-        }
+/// Coded channel planes of rows `w` values long, of the picture of level `level` →
+/// interleaved layout pixels; each row synthesised first by `rows` (the inverse transform's
+/// last step, [`inverse_but_rows`]) if given. Rows in parallel.
+fn interleave(
+    src: &Source,
+    level: u32,
+    planes: &[Vec<i32>],
+    w: usize,
+    rows: Option<Kernel>,
+) -> Vec<u8> {
+    fn pixels<const N: usize>(
+        planes: &[Vec<i32>],
+        w: usize,
+        rows: Option<Kernel>,
+        norm: Normalise,
+        out: &mut [u8],
+    ) {
+        // Per thread: the lifting's scratch row and the synthesised rows of the channels.
+        let init = || {
+            (
+                Vec::new(),
+                vec![0i32; if rows.is_some() { N * w } else { 0 }],
+            )
+        };
+        out.par_chunks_mut(N * w)
+            .enumerate()
+            .for_each_init(init, |(tmp, row), (y, out)| {
+                let source = |c: usize| &planes[c][y * w..(y + 1) * w];
+                if let Some(kernel) = rows {
+                    for (c, r) in row.chunks_exact_mut(w).enumerate() {
+                        inverse_row_into(kernel, source(c), tmp, r);
+                    }
+                }
+                let mut coded = [[0i32; RUN]; N];
+                for (k, px) in out.chunks_mut(N * RUN).enumerate() {
+                    let (a, len) = (k * RUN, px.len() / N);
+                    for (c, v) in coded.iter_mut().enumerate() {
+                        let values = match rows {
+                            Some(_) => &row[c * w + a..c * w + a + len],
+                            None => &source(c)[a..a + len],
+                        };
+                        norm.apply(values, &mut v[..len]);
+                    }
+                    layout_run::<N>(&coded, px);
+                }
+            });
     }
     let norm = Normalise::new(src, level);
+    let n = planes.first().map_or(0, Vec::len);
     let mut out = vec![0u8; n * planes.len()];
+    if w == 0 {
+        return out;
+    }
     match planes.len() {
-        1 => pixels::<1>(planes, norm, &mut out),
-        2 => pixels::<2>(planes, norm, &mut out),
-        3 => pixels::<3>(planes, norm, &mut out),
-        _ => pixels::<4>(planes, norm, &mut out),
+        1 => pixels::<1>(planes, w, rows, norm, &mut out),
+        2 => pixels::<2>(planes, w, rows, norm, &mut out),
+        3 => pixels::<3>(planes, w, rows, norm, &mut out),
+        _ => pixels::<4>(planes, w, rows, norm, &mut out),
     }
     out
 }

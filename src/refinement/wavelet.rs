@@ -167,22 +167,35 @@ fn forward_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
 
 /// Inverse of [`forward_row`].
 fn inverse_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
-    let n = row.len();
-    if n < 2 {
-        return;
-    }
-    let nl = n.div_ceil(2);
     tmp.clear();
     tmp.extend_from_slice(row);
-    let (s, d) = tmp.split_at_mut(nl);
+    lift_row_back(kernel, tmp, row);
+}
+
+/// Inverse of [`forward_row`] of `row` into `out` (as long).
+pub(crate) fn inverse_row_into(kernel: Kernel, row: &[i32], tmp: &mut Vec<i32>, out: &mut [i32]) {
+    tmp.clear();
+    tmp.extend_from_slice(row);
+    lift_row_back(kernel, tmp, out);
+}
+
+/// The inverse lifting of a row's low and high halves (`t`, clobbered), interleaved into
+/// `out`.
+#[inline(always)]
+fn lift_row_back(kernel: Kernel, t: &mut [i32], out: &mut [i32]) {
+    let n = t.len();
+    if n < 2 {
+        return out.copy_from_slice(t);
+    }
+    let (s, d) = t.split_at_mut(n.div_ceil(2));
     for &(update, step) in steps(kernel).iter().rev() {
         lift_1d(update, step, s, d, -1);
     }
     for (i, &v) in s.iter().enumerate() {
-        row[2 * i] = v;
+        out[2 * i] = v;
     }
     for (i, &v) in d.iter().enumerate() {
-        row[2 * i + 1] = v;
+        out[2 * i + 1] = v;
     }
 }
 
@@ -287,6 +300,15 @@ pub(crate) fn inverse(
     }
 }
 
+/// [`inverse`] of every level but the rows of level 0, which are left to
+/// [`inverse_row_into`] (a caller that reads each row once makes it there).
+pub(crate) fn inverse_but_rows(kernel: Kernel, plane: &mut [i32], w: usize, h: usize, levels: u32) {
+    if levels > 0 {
+        inverse(kernel, plane, w, h, levels, 1);
+        inverse_columns(kernel, plane, w, w, h, &mut Vec::new());
+    }
+}
+
 /// Synthesises each row of `m` (`w` values each: a row of the low band of level `from` of
 /// a line `full` long) to the whole line with zero detail bands, and resamples it (`axis`)
 /// into `out` (`axis`'s output length per row).
@@ -333,8 +355,20 @@ mod tests {
                         let orig: Vec<i32> = (0..w * h).map(|_| lcg(&mut seed)).collect();
                         let mut p = orig.clone();
                         forward(kernel, &mut p, w, h, levels);
+                        let mut rows = p.clone();
                         inverse(kernel, &mut p, w, h, levels, 0);
                         assert_eq!(p, orig, "{kernel:?} {w}x{h} levels {levels}");
+                        // The same with the last rows made one by one elsewhere.
+                        inverse_but_rows(kernel, &mut rows, w, h, levels);
+                        if levels > 0 {
+                            let mut tmp = Vec::new();
+                            let mut out = vec![0; w * h];
+                            for (row, o) in rows.chunks_exact(w).zip(out.chunks_exact_mut(w)) {
+                                inverse_row_into(kernel, row, &mut tmp, o);
+                            }
+                            rows = out;
+                        }
+                        assert_eq!(rows, orig, "{kernel:?} {w}x{h} levels {levels}, by rows");
                     }
                 }
             }
