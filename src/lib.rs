@@ -11,7 +11,7 @@
 //! [`sites`] (the progressive site sequence and the other samplers) →
 //! [`coding`] (colours ↔ bits) → [`container`] (bytes on disk) →
 //! [`reconstruction`] (samples → picture at any size) and [`styles`].
-#![deny(unsafe_code)]
+#![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod coding;

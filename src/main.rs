@@ -1,4 +1,5 @@
 //! The `qcs` command-line tool.
+#![forbid(unsafe_code)]
 
 mod cli;
 

@@ -6,9 +6,10 @@
 //! `D4(c) + 2r` of its centre `c`, `r` the half-diagonal), sorted by distance to `c`, and each
 //! pixel scans that list nearest first until no later candidate can come nearer than its 4th.
 //!
-//! On x86-64 CPUs with AVX, four pixels of a row scan the list together in vector registers
-//! (`avx`), without branches; a pixel whose 4 nearest an exact tie in distance could decide is
-//! redone by the portable path, which applies the tie rule. Both give the same bytes.
+//! Four pixels of a row scan the list together (`lanes`, in vectors of four of the `wide`
+//! crate: safe code, two SSE2 registers each at the baseline x86-64 target), without branches;
+//! a pixel whose 4 nearest a tie in distance could decide is redone by the per-pixel path,
+//! which applies the tie rule. Both give the same bytes.
 
 use crate::sites::Point;
 
@@ -144,7 +145,7 @@ struct Cands<const C: usize> {
     x: Vec<f64>,
     y: Vec<f64>,
     id: Vec<u32>,
-    /// Colours, padded with zeros to four channels (one AVX register each).
+    /// Colours, padded with zeros to four channels.
     colour: Vec<[f64; 4]>,
     /// Gathering scratch: squared distance bits (low `IDX_BITS` bits cleared) | index into
     /// `slots`, and the grid slots found.
@@ -418,10 +419,10 @@ impl<const C: usize> Cands<C> {
 /// smaller ones leave fewer candidates to scan per pixel. Blocks are a whole number of fours
 /// of pixels in both directions: wide, because a partial four wastes lanes; tall, because
 /// where samples are dense a block of 3 rows gathers too often. (callgrind, 1024² output from
-/// 16k / 65k / 262k sites, AVX path, per block width × height in pixels: 16k best at 8×8 to
-/// 12×12, 16×16 +7%; 65k best at 8×8, 8×6 +3%, 4×4 +9%; 262k best at 4×4, 4×3 +9%, 8×8
-/// +15%. At 1.6 spacings the sides round to 12, 8 and 4, each well inside its rounding
-/// interval; at 1.5, 65k's 6 px sat on the boundary between 4 and 8.)
+/// 16k / 65k / 262k sites, with the AVX path of then, per block width × height in pixels: 16k
+/// best at 8×8 to 12×12, 16×16 +7%; 65k best at 8×8, 8×6 +3%, 4×4 +9%; 262k best at 4×4, 4×3
+/// +9%, 8×8 +15%. At 1.6 spacings the sides round to 12, 8 and 4, each well inside its
+/// rounding interval; at 1.5, 65k's 6 px sat on the boundary between 4 and 8.)
 const BLOCK: f64 = 1.6;
 
 /// Output pixels per block side: blocks about `BLOCK` sample spacings wide, in whole `unit`s
@@ -457,8 +458,7 @@ fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: boo
     let (w, h) = (frame.width, frame.height);
     let mut out = vec![0u8; w * h * C];
     let (bw, bh) = (block_size(grid, frame.sx, 4), block_size(grid, frame.sy, 4));
-    #[cfg(target_arch = "x86_64")]
-    let avx = std::arch::is_x86_feature_detected!("avx") && !scalar_only();
+    let four = !scalar_only();
     let run = |row0: usize, band: &mut [u8]| {
         let mut cands = Cands::<C>::new();
         let rows = band.len() / (w * C);
@@ -504,16 +504,16 @@ fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: boo
                     size: (rw, rh),
                     c,
                 };
-                #[cfg(target_arch = "x86_64")]
-                if avx && cands.id.len() >= 4 {
-                    // SAFETY: the CPU has AVX (checked above).
-                    #[allow(unsafe_code)]
-                    unsafe {
-                        avx::shade_block(&cands, frame, &block, w, band)
-                    };
+                // Four at once where the candidates' numbers fit in a key and no squared
+                // distance can overflow (`r` and every `key` far below 1e150).
+                let far = cands.key.last().map_or(0.0, |&k| k + r);
+                if four && (4..=IDX_MASK as usize + 1).contains(&cands.id.len()) && far < 1e150 {
+                    shade_block(&cands, frame, &block, w, band, |qx, qy| {
+                        lanes::nearest4(&cands, qx, qy, block.c)
+                    });
                     continue;
                 }
-                shade_block(&cands, frame, &block, w, band, |_, _, _| Some([None; 4]));
+                shade_block(&cands, frame, &block, w, band, |_, _| [None; 4]);
             }
         }
     };
@@ -538,9 +538,8 @@ struct Block {
 }
 
 /// Shades the pixels of `block` into `band` (rows of `w` pixels) from `cands`, gathered for
-/// it, four pixels of a row at a time: `four` (x of each, y, their bytes) shades them and
-/// returns `None`, or returns what it found of their 4 nearest, for [`Cands::nearest`] to
-/// complete and [`Cands::shade`] to shade.
+/// it, four pixels of a row at a time: `four` (x of each, y) returns what it found of their
+/// 4 nearest, for [`Cands::nearest`] to complete and [`Cands::shade`] to shade.
 #[inline(always)]
 fn shade_block<const C: usize>(
     cands: &Cands<C>,
@@ -548,7 +547,7 @@ fn shade_block<const C: usize>(
     block: &Block,
     w: usize,
     band: &mut [u8],
-    four: impl Fn([f64; 4], f64, &mut [u8]) -> Option<[Option<Nearest>; 4]>,
+    four: impl Fn([f64; 4], f64) -> [Option<Nearest>; 4],
 ) {
     let ((bx, by, j0), (rw, rh), c) = (block.at, block.size, block.c);
     for j in 0..rh {
@@ -561,231 +560,118 @@ fn shade_block<const C: usize>(
             let Some(px) = band.get_mut(o..o + n * C) else {
                 continue;
             };
-            if let Some(found) = four(q.map(|q| q[0]), q[0][1], px) {
-                for (l, px) in px.chunks_exact_mut(C).enumerate() {
-                    let nb = found[l].unwrap_or_else(|| cands.nearest(q[l], c));
-                    cands.shade(&nb, px.try_into().expect("C bytes"));
-                }
+            let found = four(q.map(|q| q[0]), q[0][1]);
+            for (l, px) in px.chunks_exact_mut(C).enumerate() {
+                let nb = found[l].unwrap_or_else(|| cands.nearest(q[l], c));
+                cands.shade(&nb, px.try_into().expect("C bytes"));
             }
         }
     }
 }
 
-/// Four pixels at once in AVX registers: their 4 nearest, and their colours.
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-mod avx {
-    use std::arch::x86_64::*;
+/// Four pixels of a row at once, a lane of `wide`'s vectors each: their 4 nearest in one pass
+/// over the candidates. (Safe code; `wide` measured faster than plain arrays of four, which
+/// the compiler vectorises only in part: see MEASUREMENTS.md.)
+mod lanes {
+    use wide::{f64x4, CmpGt};
 
-    use super::{Block, Cands, Nearest, Point, SLACK};
+    use super::{Cands, Nearest, Point, IDX_MASK, SLACK};
 
-    /// [`super::shade_block`] with [`nearest4`] and [`shade4`].
+    /// All bits but the low [`IDX_MASK`] ones, as a double in every lane.
+    fn high() -> f64x4 {
+        f64x4::splat(f64::from_bits(!IDX_MASK))
+    }
+
+    /// The 4 nearest of the points `(qx[l], qy)` among `cands`, as [`Cands::nearest`] finds
+    /// them, with one pass over the candidates for the four lanes; `None` in a lane where a
+    /// tie could decide. The candidates must number 4 to 2¹⁶, and every squared distance from
+    /// a point to a candidate must be finite.
     ///
-    /// # Safety
-    /// The CPU must have AVX.
-    #[target_feature(enable = "avx")]
-    pub(super) unsafe fn shade_block<const C: usize>(
-        cands: &Cands<C>,
-        frame: &super::super::Frame<'_>,
-        block: &Block,
-        w: usize,
-        band: &mut [u8],
-    ) {
-        super::shade_block(cands, frame, block, w, band, |qx, qy, px| {
-            let (good, d, k) = nearest4(cands, qx, qy, block.c);
-            // Written out: a closure over `lanes` in `map` is not inlined (callgrind: +30%).
-            let k = [indices(k[0]), indices(k[1]), indices(k[2]), indices(k[3])];
-            // A pixel on a sample takes its colour: left to `Cands::shade`.
-            let on = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(d[0], _mm256_setzero_pd()));
-            if good == 0b1111 && on == 0 {
-                shade4(cands, d, k, px);
-                return None;
-            }
-            let d = d.map(|v| lanes(v));
-            Some(std::array::from_fn(|l| {
-                (good >> l & 1 == 1).then_some(Nearest {
-                    d2: [d[0][l], d[1][l], d[2][l], d[3][l]],
-                    k: [k[0][l], k[1][l], k[2][l], k[3][l]],
-                    len: 4,
-                })
-            }))
-        });
-    }
-
-    /// The four lanes of `v`.
-    #[inline]
-    #[target_feature(enable = "avx")]
-    fn lanes(v: __m256d) -> [f64; 4] {
-        let (lo, hi) = (_mm256_castpd256_pd128(v), _mm256_extractf128_pd::<1>(v));
-        [
-            _mm_cvtsd_f64(lo),
-            _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)),
-            _mm_cvtsd_f64(hi),
-            _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi)),
-        ]
-    }
-
-    /// The four lanes of `v`, each an [`index`].
-    #[inline]
-    #[target_feature(enable = "avx")]
-    fn indices(v: __m256d) -> [usize; 4] {
-        lanes(v).map(|k| k.to_bits() as usize)
-    }
-
-    /// `n` in every lane, as the bits of a double.
-    #[inline]
-    #[target_feature(enable = "avx")]
-    fn index(n: usize) -> __m256d {
-        _mm256_castsi256_pd(_mm256_set1_epi64x(n as i64))
-    }
-
-    /// The 4 nearest of the points `(qx[l], qy)` among `cands` (4 or more), as
-    /// [`Cands::nearest`] finds them, with one pass over the candidates for the four lanes:
-    /// a mask of the lanes found, and per slot (nearest first) the squared distances and the
-    /// candidate numbers (as bits).
-    ///
-    /// Each candidate enters the lanes' sorted fours by comparisons and blends only, without
-    /// branches. Distances alone decide here: a lane where an exact tie could matter (which
-    /// the tie rule by sample index settles) is left out of the mask, for [`Cands::nearest`]
-    /// to redo. That is exact: with no two of the final four as far, no candidate left out as
-    /// far as the fourth (on rejection or on eviction), and the candidates not scanned
-    /// farther by the bound, the four and their order are the tie rule's.
-    #[inline]
-    #[target_feature(enable = "avx")]
-    fn nearest4<const C: usize>(
+    /// Each candidate enters the lanes' sorted fours as a key, its squared distance with the
+    /// low `IDX_BITS` bits replaced by the candidate number (as in [`Cands::collect`]), by
+    /// minima and maxima only, without branches: keys are never NaN and never equal. Keys
+    /// order like the distances rounded down (those bits cleared), then by candidate number;
+    /// a lane where two of these rounded distances could be equal is left out, for
+    /// [`Cands::nearest`] to redo with the exact ones and the tie rule. That is exact: a
+    /// distance rounded down below another is below it, so with the final four and the least
+    /// key left out (on rejection or on eviction) strictly increasing when rounded, and the
+    /// candidates not scanned farther by the bound, the four are the nearest, in order, with
+    /// no tie for the tie rule to settle.
+    #[inline(always)]
+    pub(super) fn nearest4<const C: usize>(
         cands: &Cands<C>,
         qx: [f64; 4],
         qy: f64,
         c: Point,
-    ) -> (i32, [__m256d; 4], [__m256d; 4]) {
+    ) -> [Option<Nearest>; 4] {
         let m = cands.id.len();
         let (key, xs, ys) = (&cands.key[..m], &cands.x[..m], &cands.y[..m]);
-        let qxv = _mm256_setr_pd(qx[0], qx[1], qx[2], qx[3]);
-        // Squared distances as `Cands::nearest` computes them.
-        let dist = |k: usize| {
+        let qxv = f64x4::from(qx);
+        // Squared distances as `Cands::nearest` computes them, the candidate number in their
+        // low bits.
+        let keys = |k: usize| {
             let dy = ys[k] - qy;
-            let dx = _mm256_sub_pd(_mm256_set1_pd(xs[k]), qxv);
-            _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_set1_pd(dy * dy))
+            let dx = f64x4::splat(xs[k]) - qxv;
+            ((dx * dx + f64x4::splat(dy * dy)) & high()) | f64x4::splat(f64::from_bits(k as u64))
         };
-        let lt = |a, b| _mm256_cmp_pd::<_CMP_LT_OQ>(a, b);
-        let eq = |a, b| _mm256_cmp_pd::<_CMP_EQ_OQ>(a, b);
-        let mut d = [dist(0), dist(1), dist(2), dist(3)];
-        let mut k = [index(0), index(1), index(2), index(3)];
-        // The first four sorted by a network.
+        let mut d = [keys(0), keys(1), keys(2), keys(3)];
+        // The first four sorted by a network (keys are never NaN, and never equal).
         for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
-            let swap = lt(d[j], d[i]);
-            (d[i], d[j]) = (
-                _mm256_blendv_pd(d[i], d[j], swap),
-                _mm256_blendv_pd(d[j], d[i], swap),
-            );
-            (k[i], k[j]) = (
-                _mm256_blendv_pd(k[i], k[j], swap),
-                _mm256_blendv_pd(k[j], k[i], swap),
-            );
+            (d[i], d[j]) = (d[i].fast_min(d[j]), d[i].fast_max(d[j]));
         }
-        let (dcx, dy) = (_mm256_sub_pd(qxv, _mm256_set1_pd(c[0])), qy - c[1]);
-        let rq = _mm256_sqrt_pd(_mm256_add_pd(
-            _mm256_mul_pd(dcx, dcx),
-            _mm256_set1_pd(dy * dy),
-        ));
-        let slack = _mm256_set1_pd(SLACK);
-        let mut tie = _mm256_setzero_pd();
+        let (dcx, dy) = (qxv - f64x4::splat(c[0]), qy - c[1]);
+        let rq = (dcx * dcx + f64x4::splat(dy * dy)).sqrt();
+        // The least key left out (on rejection or on eviction).
+        let mut fifth = f64x4::splat(f64::INFINITY);
         let mut n = 4;
         while n < m {
             // A candidate at `key` from c is at least `key − rq` from q (see `nearest`): once
             // that exceeds every lane's 4th distance, no later candidate can enter. Checked
             // every 4 candidates (scanning more than needed changes nothing).
-            let limit = lanes(_mm256_mul_pd(
-                _mm256_add_pd(_mm256_sqrt_pd(d[3]), rq),
-                slack,
-            ));
-            let limit = limit[0].max(limit[1]).max(limit[2].max(limit[3]));
-            if key[n] > limit {
+            let limit = (d[3].sqrt() + rq) * f64x4::splat(SLACK);
+            if f64x4::splat(key[n]).cmp_gt(limit).all() {
                 break;
             }
             for n in n..m.min(n + 4) {
-                let (x, kn) = (dist(n), index(n));
-                let h = [lt(x, d[0]), lt(x, d[1]), lt(x, d[2]), lt(x, d[3])];
-                // As far as the 4th, or evicting a 4th as far as the new 4th.
-                let t = _mm256_or_pd(eq(x, d[3]), _mm256_and_pd(h[2], eq(d[2], d[3])));
-                tie = _mm256_or_pd(tie, t);
-                // Slot s takes slot s − 1 if x goes before that, else x if x goes before s.
-                for s in (0..4).rev() {
-                    let (mut dv, mut kv) = (
-                        _mm256_blendv_pd(d[s], x, h[s]),
-                        _mm256_blendv_pd(k[s], kn, h[s]),
-                    );
-                    if s > 0 {
-                        dv = _mm256_blendv_pd(dv, d[s - 1], h[s - 1]);
-                        kv = _mm256_blendv_pd(kv, k[s - 1], h[s - 1]);
-                    }
-                    (d[s], k[s]) = (dv, kv);
+                // Into its place in the four, the greater of each pair carried on: out goes
+                // the greatest.
+                let mut x = keys(n);
+                for d in &mut d {
+                    (*d, x) = (d.fast_min(x), d.fast_max(x));
                 }
+                fifth = fifth.fast_min(x);
             }
             n += 4;
         }
-        let strict = _mm256_and_pd(
-            _mm256_and_pd(lt(d[0], d[1]), lt(d[1], d[2])),
-            lt(d[2], d[3]),
-        );
-        (_mm256_movemask_pd(_mm256_andnot_pd(tie, strict)), d, k)
-    }
-
-    /// [`Cands::shade`] of four pixels, none on a sample, from their 4 nearest (squared
-    /// distances `d` and candidates `k`, per slot and lane), into `px` (1 to 4 pixels).
-    #[inline]
-    #[target_feature(enable = "avx")]
-    fn shade4<const C: usize>(
-        cands: &Cands<C>,
-        d: [__m256d; 4],
-        k: [[usize; 4]; 4],
-        px: &mut [u8],
-    ) {
-        let one = _mm256_set1_pd(1.0);
-        let w = d.map(|d| _mm256_div_pd(one, d));
-        let inv = _mm256_div_pd(
-            one,
-            _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(w[0], w[1]), w[2]), w[3]),
-        );
-        // Per pixel, its channels in one register: the same operations in the same order.
-        let wl = [lanes(w[0]), lanes(w[1]), lanes(w[2]), lanes(w[3])];
-        let il = lanes(inv);
-        let col = |k: usize| match cands.colour.get(k) {
-            Some(c) => _mm256_setr_pd(c[0], c[1], c[2], c[3]),
-            None => _mm256_setzero_pd(),
-        };
-        let pixel = |l: usize| {
-            let wc = |s: usize| _mm256_mul_pd(_mm256_set1_pd(wl[s][l]), col(k[s][l]));
-            let acc = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(wc(0), wc(1)), wc(2)), wc(3));
-            // As `(v + 0.5) as u8` on the `f32`: round half up, clamp to 0..=255, NaN → 0.
-            let v = _mm256_cvtpd_ps(_mm256_mul_pd(acc, _mm256_set1_pd(il[l])));
-            let v = _mm_add_ps(v, _mm_set1_ps(0.5));
-            let v = _mm_min_ps(_mm_max_ps(v, _mm_setzero_ps()), _mm_set1_ps(255.0));
-            _mm_cvttps_epi32(v)
-        };
-        let b = _mm_packus_epi16(
-            _mm_packs_epi32(pixel(0), pixel(1)),
-            _mm_packs_epi32(pixel(2), pixel(3)),
-        );
-        let lo = (_mm_cvtsi128_si64(b) as u64).to_le_bytes();
-        let hi = (_mm_extract_epi64::<1>(b) as u64).to_le_bytes();
-        // Four bytes per pixel, the first C of each into `px`.
-        for (p, a) in px
-            .chunks_exact_mut(C)
-            .zip([lo, hi].as_flattened().chunks_exact(4))
-        {
-            p.copy_from_slice(&a[..C]);
+        let (d, fifth) = (d.map(|d| d.to_array()), fifth.to_array());
+        let mut found = [None; 4];
+        for (l, found) in found.iter_mut().enumerate() {
+            let (d, q) = ([d[0][l], d[1][l], d[2][l], d[3][l]], [qx[l], qy]);
+            let t = d.map(|d| d.to_bits() & !IDX_MASK);
+            if t[0] < t[1] && t[1] < t[2] && t[2] < t[3] && t[3] < fifth[l].to_bits() & !IDX_MASK {
+                let k = d.map(|d| (d.to_bits() & IDX_MASK) as usize);
+                let d2 = |k: usize| {
+                    let (dx, dy) = (xs[k] - q[0], ys[k] - q[1]);
+                    dx * dx + dy * dy
+                };
+                *found = Some(Nearest {
+                    d2: [d2(k[0]), d2(k[1]), d2(k[2]), d2(k[3])],
+                    k,
+                    len: 4,
+                });
+            }
         }
+        found
     }
 }
 
-/// Whether renders take the portable path even where AVX is there: never, but in tests.
-#[cfg(all(target_arch = "x86_64", not(test)))]
+/// Whether renders take the per-pixel path for every pixel: never, but in tests.
+#[cfg(not(test))]
 fn scalar_only() -> bool {
     false
 }
 
-#[cfg(all(target_arch = "x86_64", test))]
+#[cfg(test)]
 fn scalar_only() -> bool {
     tests::SCALAR_ONLY.load(std::sync::atomic::Ordering::Relaxed)
 }
@@ -877,6 +763,15 @@ mod tests {
             }
         }
         sets.push(((40, 32), lattice));
+        // Near ties: a lattice with every site moved by up to 1e-12, distances that often
+        // differ in their low 16 bits only (the keys of `lanes` cannot tell them apart).
+        let near = (0..320)
+            .map(|k| {
+                let (i, j) = ((k % 20) as f64, (k / 20) as f64);
+                [i * 2.0 + 0.25 + r() * 1e-12, j * 2.0 + 0.75 + r() * 1e-12]
+            })
+            .collect();
+        sets.push(((40, 32), near));
         sets.push(((40, 32), (0..30).map(|k| [k as f64 * 1.3, 11.0]).collect()));
         sets.push((
             (40, 32),
