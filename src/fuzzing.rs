@@ -18,9 +18,12 @@ use crate::{Picture, RawDecoder, StreamDecoder};
 
 /// The limits every harness decodes with: small images, few samples, little metadata.
 ///
-/// At most 2^12 samples: under `cfg(fuzzing)` `spade` checks its bulk-load hull after every
+/// At most 2^10 samples and 2^16 pixels, so that one input costs well under a millisecond and
+/// a run reaches 10^7 executions: every code path is reached by files this small (the
+/// round trip encodes at most 24×24 pixels, 576 samples), and larger ones only repeat the same
+/// loops longer. Under `cfg(fuzzing)` `spade` also checks its bulk-load hull after every
 /// vertex, which is quadratic (a 6318-sample file took 9 s in the decode target and 10 ms in
-/// a normal build), so more samples only give the fuzzer timeouts that are not qcs's.
+/// a normal build).
 ///
 /// ```
 /// assert!(qcs::fuzzing::limits().max_samples <= 1 << 12);
@@ -28,10 +31,28 @@ use crate::{Picture, RawDecoder, StreamDecoder};
 pub fn limits() -> Limits {
     Limits {
         max_dimension: 4096,
-        max_image_pixels: 1 << 22,
+        max_image_pixels: 1 << 16,
         max_output_pixels: 64 * 64,
-        max_samples: 1 << 12,
+        max_samples: 1 << 10,
         max_metadata_bytes: 1 << 12,
+    }
+}
+
+/// Runs `f` on a pool of `threads` threads (1 or 2), made once. On one thread rayon runs its
+/// parallel loops inline, without the handoff to a worker that costs a small input more than
+/// its decode.
+fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    use std::sync::OnceLock;
+    static POOLS: [OnceLock<Option<rayon::ThreadPool>>; 2] = [OnceLock::new(), OnceLock::new()];
+    let pool = POOLS[threads.clamp(1, 2) - 1].get_or_init(|| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .ok()
+    });
+    match pool {
+        Some(pool) => pool.install(f),
+        None => f(),
     }
 }
 
@@ -97,7 +118,7 @@ fn check_decoded(d: &crate::DecodedImage, header: &Header, w: u32, h: u32) {
 /// the picture has the size asked for and the header's layout; verified ≤ used ≤ N; recovery
 /// never fails where the strict decoder succeeds and agrees with it then; the header seen by
 /// the decoder is the one [`Header::parse`] reads; the counts match [`RawDecoder`]'s; a
-/// one-thread pool gives the same result as the current pool.
+/// two-thread pool gives the same result as one thread (flag 0x20).
 ///
 /// ```
 /// qcs::fuzzing::decode(b"\x10\x10\x00qcs\x01\x00\x02\x02\x01\x03\x02\x00\x01\x08");
@@ -119,14 +140,13 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
         limits: limits(),
         recover,
     };
-    let strict = crate::decode(file, &opts(false));
-    let recovered = crate::decode(file, &opts(true));
+    let strict = on_threads(1, || crate::decode(file, &opts(false)));
+    let recovered = on_threads(1, || crate::decode(file, &opts(true)));
     // On more than one thread, Gouraud builds the cells beside the colour decoding; on one it
-    // does not. Same answer either way.
-    static ONE: std::sync::OnceLock<Option<rayon::ThreadPool>> = std::sync::OnceLock::new();
-    let one = ONE.get_or_init(|| rayon::ThreadPoolBuilder::new().num_threads(1).build().ok());
-    if let Some(one) = one.as_ref().filter(|_| rayon::current_num_threads() > 1) {
-        match (&strict, one.install(|| crate::decode(file, &opts(false)))) {
+    // does not. Same answer either way (flag 0x20: a thread handoff costs more than a small
+    // decode, so only some inputs pay for this check).
+    if flags & 0x20 != 0 {
+        match (&strict, on_threads(2, || crate::decode(file, &opts(false)))) {
             (Ok(a), Ok(b)) => {
                 assert_eq!(
                     a.samples_used, b.samples_used,
@@ -196,9 +216,9 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
 }
 
 /// The push decoder: control bytes `[seed × 4]`, then the file, fed in pseudo-random chunks
-/// (0..=64 bytes, sometimes one byte) with renders at random points and sizes (≤ 32×32),
-/// some from the first samples only, some thumbnails; some decoders decode only the levels
-/// before a sample ([`ParserOptions::decode_before`]).
+/// (0..=64 bytes, sometimes one byte) with renders at random points (about two per file) and
+/// sizes (≤ 32×32), some from the first samples only, some thumbnails; some decoders decode
+/// only the levels before a sample ([`ParserOptions::decode_before`]).
 ///
 /// Checks: a push error is final (the decoder stays poisoned); the counts never go down (but
 /// for a recovery dropping a damaged chunk's unverified samples) and
@@ -210,6 +230,10 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
 /// qcs::fuzzing::push(b"seed");
 /// ```
 pub fn push(data: &[u8]) {
+    on_threads(1, || push_on_one_thread(data))
+}
+
+fn push_on_one_thread(data: &[u8]) {
     let (ctl, file) = split(data, 4);
     let mut rng = Rng::new(ctl);
     let recover = rng.below(4) == 0;
@@ -224,6 +248,9 @@ pub fn push(data: &[u8]) {
     let mut pos = 0;
     let mut failed = false;
     let (mut last_avail, mut last_verified) = (0, 0);
+    // A render after one chunk in four, but about two per file on long files: a render costs
+    // more than a push, and the fuzzer chooses where they fall.
+    let render_odds = (file.len() as u64 / 56).max(4);
     while pos < file.len() {
         let n = match rng.below(8) {
             0 => 0,
@@ -265,7 +292,7 @@ pub fn push(data: &[u8]) {
         }
         last_avail = dec.samples_available();
         last_verified = dec.samples_verified();
-        if rng.below(4) == 0 {
+        if rng.below(render_odds) == 0 {
             let w = 1 + rng.below(32) as u32;
             let h = 1 + rng.below(32) as u32;
             let method = METHODS[rng.below(3) as usize];
@@ -481,13 +508,18 @@ fn h_too_big(parsed: &Result<(Header, usize), container::FormatError>) -> bool {
 /// to B bits and back; a prefix cut anywhere after the header decodes to a picture. The top two
 /// bits of `bits` choose the target: levels only (a constant image then decodes to its
 /// quantised constant everywhere, by every method), lossless (every pixel exact), a quality
-/// (byte `n`, a constant image decodes to within 1 of its constant from quality 50 on), or a
+/// (byte `n`, a constant image decodes to within 2 of its constant from quality 50 on: 1 for
+/// the levels' rounding, 1 for the lossy 9/7's), or a
 /// size (the file is no larger than asked, when that leaves room for the levels).
 ///
 /// ```
 /// qcs::fuzzing::roundtrip(b"\x07\x05\x02\x04\x30\x03\x00\x00pixels");
 /// ```
 pub fn roundtrip(data: &[u8]) {
+    on_threads(1, || roundtrip_on_one_thread(data))
+}
+
+fn roundtrip_on_one_thread(data: &[u8]) {
     let (ctl, px) = split(data, 8);
     let w = 1 + (byte(ctl, 0) % 24) as u32;
     let h = 1 + (byte(ctl, 1) % 24) as u32;
@@ -593,11 +625,14 @@ pub fn roundtrip(data: &[u8]) {
         match target {
             Target::Lossless => assert!(got == &pixels[..], "lossless decodes to other pixels"),
             // Levels of 6 bits or fewer are already 2 or more off, and a quality codes only
-            // the passes its threshold pays for: the check holds for finer levels.
+            // the passes its threshold pays for: the check holds for finer levels. The base is
+            // within 1 of the constant; the lossy 9/7 refinement may round one more
+            // (regression `constant-21x3-7bit-quality-55`: 157 from the levels for 156, and
+            // the 9/7's fixed-point rounding draws 158 on alternate pixels of the middle row).
             Target::Quality(q) if constant && q >= 50 && bits >= 7 => assert!(
                 got.iter()
                     .zip(pixels.iter())
-                    .all(|(&a, &b)| a.abs_diff(b) <= 1),
+                    .all(|(&a, &b)| a.abs_diff(b) <= 2),
                 "quality {q}: constant image {:?} decodes to other colours",
                 &pixels[..c]
             ),
