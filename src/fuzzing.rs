@@ -217,7 +217,7 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
 
 /// The push decoder: control bytes `[seed × 4]`, then the file, fed in pseudo-random chunks
 /// (0..=64 bytes, sometimes one byte) with renders at random points (about two per file) and
-/// sizes (≤ 32×32), some from the first samples only, some thumbnails; some decoders decode
+/// sizes (≤ 16×16), some from the first samples only, some thumbnails; some decoders decode
 /// only the levels before a sample ([`ParserOptions::decode_before`]).
 ///
 /// Checks: a push error is final (the decoder stays poisoned); the counts never go down (but
@@ -293,8 +293,8 @@ fn push_on_one_thread(data: &[u8]) {
         last_avail = dec.samples_available();
         last_verified = dec.samples_verified();
         if rng.below(render_odds) == 0 {
-            let w = 1 + rng.below(32) as u32;
-            let h = 1 + rng.below(32) as u32;
+            let w = 1 + rng.below(16) as u32;
+            let h = 1 + rng.below(16) as u32;
             let method = METHODS[rng.below(3) as usize];
             // Sometimes from the first k samples only (k below 64), sometimes a thumbnail
             // (at most 16 samples per pixel).
@@ -375,7 +375,8 @@ impl std::io::Read for Pieces<'_> {
 /// samples; and, where `strict_failed` says how a strict push of the file ended, it fails on
 /// a damaged file exactly when the push did (at a size within the limits, not as thumbnails).
 fn pull(file: &[u8], rng: &mut Rng, strict_failed: Option<bool>) {
-    let step = 1 + rng.below(256) as usize;
+    // At most about four pictures by bytes: a picture costs more than the bytes between them.
+    let step = (1 + rng.below(256) as usize).max(file.len() / 4);
     let cadence = match rng.below(2) {
         0 => Cadence::PerLevel,
         _ => Cadence::EveryBytes(step),
