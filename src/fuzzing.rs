@@ -38,22 +38,27 @@ pub fn limits() -> Limits {
     }
 }
 
-/// Runs `f` on a pool of `threads` threads (1 or 2), made once. On one thread rayon runs its
-/// parallel loops inline, without the handoff to a worker that costs a small input more than
-/// its decode.
+/// Runs `f` on one thread (`threads == 1`: this one, as the only worker of its own pool, so
+/// rayon's parallel loops run inline without a handoff, which costs a small input more than its
+/// decode) or on a pool of two.
 fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
-    use std::sync::OnceLock;
-    static POOLS: [OnceLock<Option<rayon::ThreadPool>>; 2] = [OnceLock::new(), OnceLock::new()];
-    let pool = POOLS[threads.clamp(1, 2) - 1].get_or_init(|| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .ok()
-    });
-    match pool {
+    use rayon::{ThreadPool, ThreadPoolBuilder};
+    thread_local! {
+        static HERE: Option<ThreadPool> =
+            ThreadPoolBuilder::new().num_threads(1).use_current_thread().build().ok();
+    }
+    static TWO: std::sync::OnceLock<Option<ThreadPool>> = std::sync::OnceLock::new();
+    if threads > 1 {
+        let two = TWO.get_or_init(|| ThreadPoolBuilder::new().num_threads(2).build().ok());
+        return match two {
+            Some(pool) => pool.install(f),
+            None => f(),
+        };
+    }
+    HERE.with(|here| match here {
         Some(pool) => pool.install(f),
         None => f(),
-    }
+    })
 }
 
 const METHODS: [Method; 4] = [
@@ -124,6 +129,10 @@ fn check_decoded(d: &crate::DecodedImage, header: &Header, w: u32, h: u32) {
 /// qcs::fuzzing::decode(b"\x10\x10\x00qcs\x01\x00\x02\x02\x01\x03\x02\x00\x01\x08");
 /// ```
 pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
+    on_threads(1, || decode_on_one_thread(data))
+}
+
+fn decode_on_one_thread(data: &[u8]) -> Option<crate::DecodedImage> {
     let (ctl, file) = split(data, 3);
     let w = 1 + (byte(ctl, 0) % 64) as u32;
     let h = 1 + (byte(ctl, 1) % 64) as u32;
@@ -140,8 +149,8 @@ pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
         limits: limits(),
         recover,
     };
-    let strict = on_threads(1, || crate::decode(file, &opts(false)));
-    let recovered = on_threads(1, || crate::decode(file, &opts(true)));
+    let strict = crate::decode(file, &opts(false));
+    let recovered = crate::decode(file, &opts(true));
     // On more than one thread, Gouraud builds the cells beside the colour decoding; on one it
     // does not. Same answer either way (flag 0x20: a thread handoff costs more than a small
     // decode, so only some inputs pay for this check).
