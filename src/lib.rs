@@ -20,6 +20,7 @@ mod decoder;
 mod encoder;
 pub mod error;
 pub mod eval;
+#[cfg(any(fuzzing, feature = "fuzzing"))]
 #[doc(hidden)]
 pub mod fuzzing;
 mod integration;
