@@ -105,10 +105,10 @@ pub struct StreamDecoder {
     stopped: Option<FormatError>,
     metadata: Vec<Metadata>,
     /// Levels starting at or after this sample are parsed and verified but not decoded
-    /// ([`ParserOptions::decode_before`]): a decode capped at fewer samples does not pay for
+    /// ([`ParserOptions::max_samples`]): a decode capped at fewer samples does not pay for
     /// the rest.
-    decode_limit: u64,
-    /// Whether the level being parsed is past `decode_limit`.
+    max_samples: u64,
+    /// Whether the level being parsed is past `max_samples`.
     skipping: bool,
     /// Set when `push` returned an error: the events after it were not applied, so the state
     /// no longer follows the parser and every further `push` must fail.
@@ -128,7 +128,7 @@ impl StreamDecoder {
     }
 
     /// A decoder with parser options: `recover(true)` keeps the longest verified prefix of a
-    /// damaged file instead of failing (see [`StreamDecoder::stopped`]); `decode_before(k)`
+    /// damaged file instead of failing (see [`StreamDecoder::stopped`]); `max_samples(k)`
     /// decodes only the levels that start before sample `k` (the later ones are parsed and
     /// verified, not decoded), for a stream shown at a size that needs no more, e.g.
     /// [`thumbnail_samples`] for [`StreamDecoder::render_thumbnail`]. The sample limit then
@@ -141,7 +141,7 @@ impl StreamDecoder {
     /// // A file of levels only: one sample per 4 pixels.
     /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
     /// let bytes = qcs::encode(&img, &levels)?;
-    /// let opts = ParserOptions::default().decode_before(qcs::thumbnail_samples(6, 6));
+    /// let opts = ParserOptions::default().max_samples(qcs::thumbnail_samples(6, 6));
     /// let mut dec = StreamDecoder::with_options(opts);
     /// dec.push(&bytes)?;
     /// assert!(dec.is_complete() && dec.samples_available() < 96 * 96 / 4);
@@ -150,7 +150,7 @@ impl StreamDecoder {
     /// # Ok::<(), qcs::Error>(())
     /// ```
     pub fn with_options(opts: ParserOptions) -> Self {
-        let decode_limit = opts.decode_before.unwrap_or(u64::MAX);
+        let max_samples = opts.max_samples.unwrap_or(u64::MAX);
         StreamDecoder {
             limits: opts.limits.clone(),
             parser: Parser::new(opts),
@@ -166,7 +166,7 @@ impl StreamDecoder {
             set: None,
             stopped: None,
             metadata: Vec::new(),
-            decode_limit,
+            max_samples,
             skipping: false,
             failed: false,
             refinement: None,
@@ -258,7 +258,7 @@ impl StreamDecoder {
                 ..
             } => {
                 let h = self.header.as_ref().expect("header precedes levels");
-                self.skipping = samples.start >= self.decode_limit;
+                self.skipping = samples.start >= self.max_samples;
                 if self.skipping {
                     self.unpacker = None;
                     return Ok(());
@@ -383,7 +383,7 @@ impl StreamDecoder {
     }
 
     /// Whether every level (and every refinement layer) of the file has arrived and is
-    /// verified (with [`ParserOptions::decode_before`], those past it are verified but not
+    /// verified (with [`ParserOptions::max_samples`], those past it are verified but not
     /// decoded).
     pub fn is_complete(&self) -> bool {
         self.header.as_ref().is_some_and(|h| {
@@ -856,7 +856,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     let mut dec = StreamDecoder::with_options(
         ParserOptions::with_limits(opts.limits.clone())
             .recover(opts.recover)
-            .decode_before(max_samples),
+            .max_samples(max_samples),
     );
     if let (true, Some((w, h))) = (opts.thumbnail, opts.size) {
         dec = dec.with_thumbnail_size(w, h);
@@ -900,7 +900,7 @@ fn push_whole(
         .max()
         .unwrap_or(0)
         .min(h.total_samples);
-    // The levels that start at or after `max_samples` are only verified (`decode_before`).
+    // The levels that start at or after `max_samples` are only verified (`ParserOptions::max_samples`).
     let present = present.min(h.samples_of_levels_before(max_samples)) as usize;
     // The levels' colours need their sites' positions, the cells the sites.
     dec.sites = Arc::new(seq.first(present));

@@ -189,7 +189,7 @@ fn decode_on_one_thread(data: &[u8]) -> Option<crate::DecodedImage> {
             .min(16 * w as u64 * h as u64),
         false => max_samples.unwrap_or(u64::MAX),
     };
-    let mut raw = RawDecoder::new(ParserOptions::with_limits(limits()).decode_before(cap));
+    let mut raw = RawDecoder::new(ParserOptions::with_limits(limits()).max_samples(cap));
     let raw_result = raw.push(file);
 
     match (&strict, &recovered) {
@@ -235,7 +235,7 @@ fn decode_on_one_thread(data: &[u8]) -> Option<crate::DecodedImage> {
 /// The push decoder: control bytes `[seed × 4]`, then the file, fed in pseudo-random chunks
 /// (0..=64 bytes, sometimes one byte) with renders at random points (about two per file) and
 /// sizes (≤ 16×16), some from the first samples only, some thumbnails; some decoders decode
-/// only the levels before a sample ([`ParserOptions::decode_before`]).
+/// only the levels before a sample ([`ParserOptions::max_samples`]).
 ///
 /// Checks: a push error is final (the decoder stays poisoned); the counts never go down (but
 /// for a recovery dropping a damaged chunk's unverified samples) and
@@ -259,7 +259,7 @@ fn push_on_one_thread(data: &[u8]) {
     // thumbnails: the levels after it are verified, not decoded.
     let cap = (rng.below(4) == 0).then(|| rng.below(256));
     if let Some(k) = cap {
-        opts = opts.decode_before(k);
+        opts = opts.max_samples(k);
     }
     let mut dec = StreamDecoder::with_options(opts.clone());
     let mut pos = 0;

@@ -115,7 +115,7 @@ impl<R: Read> Previews<R> {
             // Nothing read yet: decode only what the thumbnails draw on.
             let (w, h) = self.size.unwrap_or((u32::MAX, u32::MAX));
             let opts = ParserOptions::with_limits(self.limits.clone());
-            self.decoder = StreamDecoder::with_options(opts.decode_before(thumbnail_samples(w, h)))
+            self.decoder = StreamDecoder::with_options(opts.max_samples(thumbnail_samples(w, h)))
                 .with_thumbnail_size(w, h);
         }
         self

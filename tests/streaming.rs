@@ -272,7 +272,7 @@ fn render_thumbnail_equals_a_one_shot_thumbnail() {
 }
 
 /// A push decoder that decodes only the levels before a thumbnail's samples
-/// (`ParserOptions::decode_before`) draws the same thumbnails as one that decodes them all, at
+/// (`ParserOptions::max_samples`) draws the same thumbnails as one that decodes them all, at
 /// every cut, while decoding no level past them; it takes a file with more samples than its
 /// limit, and is complete once every level is verified.
 #[test]
@@ -288,7 +288,7 @@ fn a_decoder_capped_at_a_thumbnails_samples_draws_the_same_thumbnails() {
     assert!(StreamDecoder::with_options(opts.clone())
         .push(&bytes)
         .is_err());
-    let mut capped = StreamDecoder::with_options(opts.decode_before(cap));
+    let mut capped = StreamDecoder::with_options(opts.max_samples(cap));
     let mut whole = StreamDecoder::new(Limits::default());
     for piece in bytes.chunks(7) {
         capped.push(piece).expect("push");

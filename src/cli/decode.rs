@@ -99,7 +99,7 @@ pub(super) fn stream_decoder(
 ) -> StreamDecoder {
     let opts = qcs::container::ParserOptions::with_limits(ctx.limits.clone()).recover(recover);
     StreamDecoder::with_options(match thumbnail {
-        true => opts.decode_before(qcs::thumbnail_samples(size.0, size.1)),
+        true => opts.max_samples(qcs::thumbnail_samples(size.0, size.1)),
         false => opts,
     })
 }

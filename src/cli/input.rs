@@ -186,7 +186,7 @@ pub struct ReadQcs {
 /// read, to check what the header implies (an output size, the samples to decode). Reading
 /// stops at `--bytes`, and an input longer than `--max-input` is refused.
 ///
-/// The push decoder decodes no colours (`decode_before(0)`): it checks the header (the
+/// The push decoder decodes no colours (`max_samples(0)`): it checks the header (the
 /// limits on the image, the lattice frame), every chunk's CRC and the metadata limit.
 pub fn read_qcs(
     src: Source,
@@ -196,7 +196,7 @@ pub fn read_qcs(
 ) -> Result<QcsInput> {
     let opts = ParserOptions::with_limits(ctx.limits.clone())
         .recover(how.recover)
-        .decode_before(0);
+        .max_samples(0);
     let mut gate = StreamDecoder::with_options(opts);
     let mut bytes = Vec::new();
     let mut refused = None;
@@ -234,7 +234,7 @@ pub fn read_qcs(
 }
 
 /// The samples a decode that stops at sample `k` decodes: every sample of the levels that
-/// start before `k` (what `ParserOptions::decode_before` checks against the limits).
+/// start before `k` (what `ParserOptions::max_samples` checks against the limits).
 pub fn samples_of_levels_before(h: &Header, k: u64) -> u64 {
     (0..h.level_count())
         .map_while(|l| h.level_range(l))

@@ -26,9 +26,11 @@ pub struct ParserOptions {
     /// On a format error after the header (CRC mismatch, bad chunk), stop with
     /// [`Event::Stopped`] and keep the longest verified prefix instead of failing.
     pub recover: bool,
-    /// The caller decodes only the levels that start before this sample (`None`: all): the
-    /// sample limit is checked against the samples of those levels, not the header's count.
-    pub decode_before: Option<u64>,
+    /// The caller draws on at most this many samples (`None`: all), as
+    /// [`crate::DecodeOptions::max_samples`]: only the levels that start before it are decoded,
+    /// and the sample limit is checked against the samples of those levels, not the header's
+    /// count.
+    pub max_samples: Option<u64>,
 }
 
 impl ParserOptions {
@@ -37,7 +39,7 @@ impl ParserOptions {
         ParserOptions {
             limits,
             recover: false,
-            decode_before: None,
+            max_samples: None,
         }
     }
 
@@ -47,7 +49,8 @@ impl ParserOptions {
         self
     }
 
-    /// These options for a caller that decodes only the levels starting before sample `k`.
+    /// These options for a caller that draws on at most `k` samples: the levels starting
+    /// before sample `k` are decoded.
     ///
     /// ```
     /// use qcs::container::{Coding, ContainerWriter, Header, Layout, Parser, ParserOptions};
@@ -59,12 +62,12 @@ impl ParserOptions {
     /// let push = |opts| Parser::new(opts).push(&bytes, &mut Vec::new()).map(|_| ());
     /// assert!(push(ParserOptions::with_limits(limits.clone())).is_err());
     /// // Samples 0..800 are in the levels that start before sample 500.
-    /// assert!(push(ParserOptions::with_limits(limits.clone()).decode_before(500)).is_ok());
-    /// assert!(push(ParserOptions::with_limits(limits).decode_before(801)).is_err());
+    /// assert!(push(ParserOptions::with_limits(limits.clone()).max_samples(500)).is_ok());
+    /// assert!(push(ParserOptions::with_limits(limits).max_samples(801)).is_err());
     /// # Ok::<(), qcs::Error>(())
     /// ```
-    pub fn decode_before(mut self, k: u64) -> Self {
-        self.decode_before = Some(k);
+    pub fn max_samples(mut self, k: u64) -> Self {
+        self.max_samples = Some(k);
         self
     }
 }
@@ -641,7 +644,7 @@ impl Parser {
                 limits
                     .check_image(header.width as u64, header.height as u64)
                     .map_err(Fail::Limits)?;
-                let decoded = match self.opts.decode_before {
+                let decoded = match self.opts.max_samples {
                     Some(k) => header.samples_of_levels_before(k),
                     None => header.total_samples,
                 };
