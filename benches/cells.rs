@@ -21,7 +21,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use qcs::lattice::ZZeta;
-use qcs::reconstruction::{Cells, Method, RenderOptions, SampleSet, Triangulation, Vertex};
+use qcs::reconstruction::{Cells, Method, RenderOptions, SampleMesh, SampleSet, Vertex};
 use qcs::sites::Quasicrystal;
 use spade::{Point2, Triangulation as _};
 
@@ -86,13 +86,13 @@ fn exact_cells(c: &mut Criterion) {
         g.throughput(Throughput::Elements(n as u64));
         g.bench_function(BenchmarkId::new("spade_bulk_load", n), |b| {
             b.iter(|| {
-                let t = Triangulation::bulk_load_stable(vertices.clone()).expect("spade");
+                let t = SampleMesh::bulk_load_stable(vertices.clone()).expect("spade");
                 black_box(t.num_inner_faces())
             })
         });
         g.bench_function(BenchmarkId::new("spade_then_exact", n), |b| {
             b.iter(|| {
-                let t = Triangulation::bulk_load_stable(vertices.clone()).expect("spade");
+                let t = SampleMesh::bulk_load_stable(vertices.clone()).expect("spade");
                 black_box(Cells::build(&t, &lattice).map(|c| c.len()))
             })
         });

@@ -34,7 +34,7 @@ use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageEncoder, RgbImage};
 use qcs::reconstruction::{
-    rasterise, triangles, Grid, Method, RenderOptions, SampleSet, Triangulation, Vertex,
+    rasterise, triangles, Method, RenderOptions, SampleGrid, SampleMesh, SampleSet, Vertex,
 };
 use spade::{Point2, Triangulation as _};
 
@@ -118,7 +118,7 @@ fn bench(c: &mut Criterion) {
                         index: k as u32,
                     })
                     .collect();
-                black_box(Triangulation::bulk_load(v).map(|t| t.num_inner_faces()))
+                black_box(SampleMesh::bulk_load(v).map(|t| t.num_inner_faces()))
             })
         });
         tri.bench_with_input(BenchmarkId::new("sample_set_stable", n), &sites, |b, s| {
@@ -128,7 +128,7 @@ fn bench(c: &mut Criterion) {
             })
         });
         tri.bench_with_input(BenchmarkId::new("shepard_grid", n), &sites, |b, s| {
-            b.iter(|| black_box(Grid::new(s).len()))
+            b.iter(|| black_box(SampleGrid::new(s).len()))
         });
     }
     tri.finish();

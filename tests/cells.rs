@@ -2,7 +2,7 @@
 //! Gouraud picture that depends on the samples only.
 
 use qcs::lattice::{incircle, incircle_value, orient, ZTau, ZZeta};
-use qcs::reconstruction::{Cells, Method, RenderOptions, SampleSet, Triangulation, Vertex};
+use qcs::reconstruction::{Cells, Method, RenderOptions, SampleMesh, SampleSet, Vertex};
 use qcs::sampling::{SampleColour, SourceImage};
 use qcs::sites::{Quasicrystal, Site};
 use spade::{Point2, Triangulation as _};
@@ -486,7 +486,7 @@ fn exact_flips_repair_a_non_delaunay_triangulation() {
                 }
             })
             .collect();
-        Triangulation::bulk_load_stable(v).expect("bulk load")
+        SampleMesh::bulk_load_stable(v).expect("bulk load")
     };
     let reference = Cells::build(&build(0.0, &mut rng), &exact).expect("cells");
     assert_eq!(reference.flips(), 0);

@@ -72,7 +72,7 @@ impl Default for EvalOptions {
 
 /// One step of [`run`], for a progress bar.
 #[derive(Clone, Debug)]
-pub struct Progress<'a> {
+pub struct Step<'a> {
     /// Steps finished.
     pub done: usize,
     /// Steps in all.
@@ -204,7 +204,7 @@ pub fn run(
     samplers: &[Box<dyn Sampler + Send + Sync>],
     out_dir: &Path,
     options: &EvalOptions,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut dyn FnMut(Step),
 ) -> Result<Report> {
     if images.is_empty() || samplers.is_empty() {
         return Err(Error::invalid(
@@ -272,7 +272,7 @@ pub fn run(
                 }
                 done += 1;
                 let stage = format!("{name}/{}/{}", s.name(), method_name(method));
-                progress(Progress {
+                progress(Step {
                     done,
                     total,
                     stage: &stage,
@@ -318,7 +318,7 @@ pub fn run(
         files.push(path);
         done += 1;
         let stage = format!("panels/{name}");
-        progress(Progress {
+        progress(Step {
             done,
             total,
             stage: &stage,

@@ -128,7 +128,7 @@ fn cells_with(
         .map(|x| x.filter(|&x| within_exact_limit(x)))
         .collect::<Option<_>>()?;
     // The key's radius from a grid for the pilot, then a grid for that radius.
-    let pilot = Grid::new(positions, &zz);
+    let pilot = PointGrid::new(positions, &zz);
     let Some((reach, grid)) = pilot.and_then(|g| {
         let r = g.radius()?;
         Some((r, g.with_side(r / 2.0)?))
@@ -240,7 +240,7 @@ impl Local {
     /// reach from it; `None` if those cells do not surround it.
     fn star(
         &mut self,
-        grid: &Grid,
+        grid: &PointGrid,
         c: usize,
         k: usize,
         reach: f64,
@@ -382,7 +382,7 @@ impl Vectors {
 
 /// The points bucketed in a grid of square cells, with their positions and lattice points
 /// stored in bucket order, so that a site's neighbours are near in memory.
-struct Grid {
+struct PointGrid {
     /// The mean spacing of the points, √(area / points), in the box of their central 98 %.
     spacing: f64,
     central: [Point; 2],
@@ -398,10 +398,10 @@ struct Grid {
     zz: Vec<ZZeta>,
 }
 
-impl Grid {
+impl PointGrid {
     /// The points in buckets of [`PILOT_SIDE`] mean spacings. `None` if they span no area
     /// (or too little for buckets to make sense).
-    fn new(positions: &[Point], zz: &[ZZeta]) -> Option<Grid> {
+    fn new(positions: &[Point], zz: &[ZZeta]) -> Option<PointGrid> {
         let n = positions.len();
         if positions.iter().flatten().any(|x| !x.is_finite()) {
             return None;
@@ -425,7 +425,7 @@ impl Grid {
         let spacing = (area / count as f64).sqrt();
         let point: Vec<u32> = (0..n as u32).collect();
         let central = [qlo, qhi];
-        Grid::bucket(
+        PointGrid::bucket(
             spacing,
             central,
             PILOT_SIDE * spacing,
@@ -436,8 +436,8 @@ impl Grid {
     }
 
     /// The same points in buckets of `side`.
-    fn with_side(&self, side: f64) -> Option<Grid> {
-        Grid::bucket(
+    fn with_side(&self, side: f64) -> Option<PointGrid> {
+        PointGrid::bucket(
             self.spacing,
             self.central,
             side,
@@ -457,7 +457,7 @@ impl Grid {
         point: &[u32],
         pos: &[Point],
         zz: &[ZZeta],
-    ) -> Option<Grid> {
+    ) -> Option<PointGrid> {
         let [qlo, qhi] = central;
         if !(side.is_finite() && side > 0.0) {
             return None;
@@ -496,7 +496,7 @@ impl Grid {
             order[fill[b as usize] as usize] = k as u32;
             fill[b as usize] += 1;
         }
-        Some(Grid {
+        Some(PointGrid {
             spacing,
             central,
             side,

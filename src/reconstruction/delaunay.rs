@@ -18,7 +18,7 @@
 use spade::Triangulation as _;
 
 use super::cells::Cells;
-use super::mesh::{self, Triangulation};
+use super::mesh::{self, SampleMesh};
 use crate::lattice::{incircle_exact, orient_value, within_exact_limit, ZZeta};
 use crate::sites::Point;
 
@@ -291,12 +291,12 @@ impl Cells {
     ///
     /// ```
     /// use qcs::lattice::ZZeta;
-    /// use qcs::reconstruction::{Cells, Triangulation, Vertex};
+    /// use qcs::reconstruction::{Cells, SampleMesh, Vertex};
     /// use spade::{Point2, Triangulation as _};
     /// // The regular pentagon 1, ζ, …, ζ⁴ (unit roots, pixel = 10 + 5·x).
     /// let z = |k: usize| { let mut n = [0i64; 4]; if k < 4 { n[k] = 1 } else { n = [-1; 4] }; ZZeta::new(n) };
     /// let lattice: Vec<Option<ZZeta>> = (0..5).map(|k| Some(z(k))).collect();
-    /// let mut mesh = Triangulation::new();
+    /// let mut mesh = SampleMesh::new();
     /// for (k, x) in lattice.iter().enumerate() {
     ///     let (re, im) = x.unwrap().to_f64();
     ///     mesh.insert(Vertex { position: Point2::new(10.0 + 5.0 * re, 10.0 + 5.0 * im), index: k as u32 }).unwrap();
@@ -307,7 +307,7 @@ impl Cells {
     /// // Counter-clockwise from the smallest lattice point, ζ⁴ = (−1, −1, −1, −1).
     /// assert_eq!(cells.get(0), Some(&[4u32, 0, 1, 2, 3][..]));
     /// ```
-    pub fn build(mesh: &Triangulation, lattice: &[Option<ZZeta>]) -> Option<Cells> {
+    pub fn build(mesh: &SampleMesh, lattice: &[Option<ZZeta>]) -> Option<Cells> {
         Some(LiveCells::build(mesh, lattice)?.cells())
     }
 
@@ -355,7 +355,7 @@ pub(crate) struct LiveCells {
 
 impl LiveCells {
     /// From any Delaunay triangulation of `lattice[0..n]` (`mesh` vertices index `lattice`).
-    pub(crate) fn build(mesh: &Triangulation, lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
+    pub(crate) fn build(mesh: &SampleMesh, lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
         let mut store = Store::default();
         // Point index → internal id.
         let mut int_of = vec![NONE; lattice.len()];
@@ -388,7 +388,7 @@ impl LiveCells {
     /// (or the insertion gives up: the caller bulk loads them all).
     pub(crate) fn grow(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
         let seed = lattice.len().min(SEED);
-        let mut mesh = Triangulation::new();
+        let mut mesh = SampleMesh::new();
         mesh::sync(&mut mesh, &positions[..seed], &mut 0);
         let mut live = LiveCells::build(&mesh, &lattice[..seed])?;
         live.extend(lattice).ok()?;
@@ -639,7 +639,7 @@ struct Mesh {
 impl Mesh {
     /// Triangles and adjacency from `spade` (inner face `k` has index `k + 1` there), with
     /// vertices renamed by `int_of`.
-    fn new(mesh: &Triangulation, int_of: &[u32]) -> Option<Mesh> {
+    fn new(mesh: &SampleMesh, int_of: &[u32]) -> Option<Mesh> {
         let n = mesh.num_inner_faces();
         let mut tri = vec![[0u32; 3]; n];
         let mut nbr = vec![[NONE; 3]; n];
@@ -1025,12 +1025,12 @@ mod tests {
                 [100.0 + 10.0 * re, 100.0 + 10.0 * im]
             })
             .collect();
-        let mut seed = Triangulation::new();
+        let mut seed = SampleMesh::new();
         mesh::sync(&mut seed, &positions[..3], &mut 0);
         let mut live = LiveCells::build(&seed, &lattice[..3]).unwrap();
         for n in 4..=lattice.len() {
             live.extend(&lattice[..n]).unwrap();
-            let mut all = Triangulation::new();
+            let mut all = SampleMesh::new();
             mesh::sync(&mut all, &positions[..n], &mut 0);
             let sorted = |c: &Cells| {
                 let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();

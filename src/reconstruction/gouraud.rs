@@ -9,15 +9,15 @@ use spade::Triangulation as _;
 use super::cells::Cells;
 use super::cubic;
 use super::hull::{colour_of, Boundary};
-use super::mesh::Triangulation;
+use super::mesh::SampleMesh;
 use super::raster::{self, fmax, fmin, Band, RasterTriangle, RasterVertex};
-use super::{fill_unpainted, Frame};
+use super::{fill_unpainted, Output};
 use crate::sites::Point;
 
 /// The inner faces of `mesh` as triples of point indices, each starting from its smallest
 /// index, so the same triangle always gives the same arithmetic whichever way the mesh was
 /// built.
-fn faces(mesh: &Triangulation) -> Vec<[u32; 3]> {
+fn faces(mesh: &SampleMesh) -> Vec<[u32; 3]> {
     let mut out = Vec::with_capacity(mesh.num_inner_faces());
     for f in mesh.inner_faces() {
         let [a, b, c] = f.vertices().map(|v| v.data().index);
@@ -63,7 +63,7 @@ fn at(vertices: &[RasterVertex], i: u32) -> &RasterVertex {
 /// Vertices are listed starting from the one with the smallest sample index, so the same
 /// triangle always gives the same arithmetic whichever way the mesh was built.
 pub fn triangles(
-    mesh: &Triangulation,
+    mesh: &SampleMesh,
     colours: &[u8],
     channels: usize,
     scale: [f64; 2],
@@ -172,10 +172,10 @@ fn cell_fan(
 /// vertices index `positions`), else over `mesh`'s own triangles. Each cell (or triangle) is
 /// set up afresh in every band of rows it touches, so nothing per triangle is kept in memory.
 pub(crate) fn render(
-    mesh: &Triangulation,
+    mesh: &SampleMesh,
     cells: Option<&Cells>,
     positions: &[Point],
-    frame: &Frame<'_>,
+    frame: &Output<'_>,
     (parallel, cubic): (bool, bool),
 ) -> Vec<u8> {
     let (w, h, c) = (frame.width, frame.height, frame.channels);

@@ -10,7 +10,7 @@
 
 use spade::Triangulation as _;
 
-use super::mesh::Triangulation;
+use super::mesh::SampleMesh;
 
 /// One piece of the boundary: end points (source pixels) and their colours.
 #[derive(Clone, Copy, Debug)]
@@ -66,7 +66,7 @@ pub(crate) fn colour_of(colours: &[u8], channels: usize, index: usize) -> [f32; 
 
 impl Boundary {
     /// The hull boundary of `mesh` (see the module rule for degenerate sets).
-    pub(crate) fn new(mesh: &Triangulation, colours: &[u8], channels: usize) -> Boundary {
+    pub(crate) fn new(mesh: &SampleMesh, colours: &[u8], channels: usize) -> Boundary {
         let vertex = |v: spade::handles::VertexHandle<'_, super::mesh::Vertex>| {
             let p = v.position();
             (

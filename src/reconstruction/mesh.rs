@@ -6,7 +6,7 @@ use spade::{
 
 use crate::sites::Point;
 
-/// A vertex of the [`Triangulation`]: a sample position (source pixels) and the
+/// A vertex of the [`SampleMesh`]: a sample position (source pixels) and the
 /// index of the sample in its [`SampleSet`](super::SampleSet).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vertex {
@@ -24,7 +24,7 @@ impl HasPosition for Vertex {
 }
 
 /// The Delaunay triangulation used by every method, in source pixel coordinates.
-pub type Triangulation = DelaunayTriangulation<Vertex, (), (), (), HierarchyHintGenerator<f64>>;
+pub type SampleMesh = DelaunayTriangulation<Vertex, (), (), (), HierarchyHintGenerator<f64>>;
 
 /// Makes a position acceptable to `spade`, or `None` if it cannot be (NaN, ±∞, beyond spade's range).
 pub(crate) fn sanitize(pos: Point) -> Option<Point> {
@@ -41,7 +41,7 @@ pub(crate) fn sanitize(pos: Point) -> Option<Point> {
 /// An empty mesh is bulk loaded (stable, so duplicates keep the first sample); a non-empty one
 /// gets the new samples inserted one by one (the hierarchy makes each insertion O(log n)).
 /// A position that is already a vertex keeps its first sample (spade would overwrite it).
-pub(crate) fn sync(mesh: &mut Triangulation, positions: &[Point], synced: &mut usize) {
+pub(crate) fn sync(mesh: &mut SampleMesh, positions: &[Point], synced: &mut usize) {
     if *synced >= positions.len() {
         return;
     }
@@ -61,13 +61,13 @@ pub(crate) fn sync(mesh: &mut Triangulation, positions: &[Point], synced: &mut u
             .collect();
         // Positions were sanitized on push, so bulk loading cannot fail; fall back to
         // insertion anyway rather than panic.
-        match Triangulation::bulk_load_stable(vertices) {
+        match SampleMesh::bulk_load_stable(vertices) {
             Ok(t) => {
                 *mesh = t;
                 *synced = positions.len();
                 return;
             }
-            Err(_) => *mesh = Triangulation::new(),
+            Err(_) => *mesh = SampleMesh::new(),
         }
     }
     for (k, p) in new.iter().enumerate() {

@@ -66,11 +66,11 @@ use crate::sites::{Frame as LatticeFrame, Point};
 pub use cells::Cells;
 use delaunay::LiveCells;
 pub use gouraud::{cell_triangles, triangles};
-pub use mesh::{Triangulation, Vertex};
+pub use mesh::{SampleMesh, Vertex};
 #[doc(hidden)]
 pub use raster::raster_coverage;
 pub use raster::{rasterise, RasterTriangle, RasterVertex};
-pub use shepard::Grid;
+pub use shepard::SampleGrid;
 
 use hull::Boundary;
 use mirror::{mirror_points, Lines};
@@ -187,9 +187,9 @@ pub struct SampleSet {
     points: Points,
     /// The index in `points` of each sample.
     starts: Vec<usize>,
-    mesh: Triangulation,
+    mesh: SampleMesh,
     synced: usize,
-    grid: Option<Grid>,
+    grid: Option<SampleGrid>,
     /// The exact triangulation behind the cells, updated locally as points arrive.
     live: Option<LiveCells>,
     /// How many times it was built from scratch.
@@ -215,7 +215,7 @@ impl SampleSet {
             lines: Lines::new(frame, source_width, source_height),
             points: Points::default(),
             starts: Vec::new(),
-            mesh: Triangulation::new(),
+            mesh: SampleMesh::new(),
             synced: 0,
             grid: None,
             live: None,
@@ -461,7 +461,7 @@ impl SampleSet {
     /// // The first samples are mirrored: 4 + 4·8 points, the duplicate and its mirrors skipped.
     /// assert_eq!(set.triangulation().num_vertices(), 36);
     /// ```
-    pub fn triangulation(&mut self) -> &Triangulation {
+    pub fn triangulation(&mut self) -> &SampleMesh {
         mesh::sync(&mut self.mesh, &self.points.positions, &mut self.synced);
         &self.mesh
     }
@@ -574,7 +574,7 @@ impl SampleSet {
         if matches!(method, Method::Gouraud | Method::Cubic) {
             self.sync_cells(false);
         }
-        let mut frame = Frame {
+        let mut frame = Output {
             width: w,
             height: h,
             channels: c,
@@ -597,8 +597,8 @@ impl SampleSet {
                 natural::render(&self.mesh, &frame, options.parallel)
             }
             Method::Shepard => {
-                if self.grid.as_ref().map(Grid::len) != Some(self.positions.len()) {
-                    self.grid = Some(Grid::new(&self.positions));
+                if self.grid.as_ref().map(SampleGrid::len) != Some(self.positions.len()) {
+                    self.grid = Some(SampleGrid::new(&self.positions));
                 }
                 let grid = match &self.grid {
                     Some(g) => g,
@@ -664,7 +664,7 @@ pub fn render_with(
 }
 
 /// What every method needs to know about the output.
-pub(crate) struct Frame<'a> {
+pub(crate) struct Output<'a> {
     pub(crate) width: usize,
     pub(crate) height: usize,
     pub(crate) channels: usize,
@@ -674,7 +674,7 @@ pub(crate) struct Frame<'a> {
     pub(crate) sy: f64,
 }
 
-impl Frame<'_> {
+impl Output<'_> {
     /// Centre of output pixel `(i, j)` in source pixels.
     #[inline]
     pub(crate) fn source_point(&self, i: usize, j: usize) -> Point {
@@ -697,7 +697,7 @@ fn store(px: &mut [u8], colour: [f32; 4]) {
 }
 
 /// Paints the pixels of `band` that no triangle claimed, by the outside-the-hull rule.
-pub(crate) fn fill_unpainted(band: &mut Band<'_>, frame: &Frame<'_>, boundary: &Boundary) {
+pub(crate) fn fill_unpainted(band: &mut Band<'_>, frame: &Output<'_>, boundary: &Boundary) {
     let (w, c) = (band.width, band.channels);
     let Some(painted) = band.painted.as_deref() else {
         return; // The triangles cover the band.
@@ -721,7 +721,7 @@ pub(crate) fn fill_unpainted(band: &mut Band<'_>, frame: &Frame<'_>, boundary: &
 }
 
 /// Renders by evaluating `f` at every pixel centre (in source pixels), with per-band state `S`.
-pub(crate) fn per_pixel<S, M, F>(frame: &Frame<'_>, parallel: bool, make: M, f: F) -> Vec<u8>
+pub(crate) fn per_pixel<S, M, F>(frame: &Output<'_>, parallel: bool, make: M, f: F) -> Vec<u8>
 where
     M: Fn() -> S + Sync,
     F: Fn(&mut S, Point) -> [f32; 4] + Sync,

@@ -3,11 +3,11 @@
 use spade::{Point2, Triangulation as _};
 
 use super::hull::{colour_of, Boundary};
-use super::mesh::Triangulation;
-use super::{per_pixel, Frame};
+use super::mesh::SampleMesh;
+use super::{per_pixel, Output};
 
 /// Renders `mesh` by natural-neighbour interpolation into `frame`'s output.
-pub(crate) fn render(mesh: &Triangulation, frame: &Frame<'_>, parallel: bool) -> Vec<u8> {
+pub(crate) fn render(mesh: &SampleMesh, frame: &Output<'_>, parallel: bool) -> Vec<u8> {
     let boundary = Boundary::new(mesh, frame.colours, frame.channels);
     let c = frame.channels;
     per_pixel(

@@ -18,7 +18,7 @@ const PER_CELL: f64 = 2.0;
 
 /// A uniform bucket grid over sample positions (source pixels), cells in row-major order.
 #[derive(Clone, Debug)]
-pub struct Grid {
+pub struct SampleGrid {
     x0: f64,
     y0: f64,
     inv_cs: f64,
@@ -32,9 +32,9 @@ pub struct Grid {
     ids: Vec<u32>,
 }
 
-impl Grid {
+impl SampleGrid {
     /// Buckets `positions` (sample `k` has index `k`); `None`-free: any finite input works.
-    pub fn new(positions: &[Point]) -> Grid {
+    pub fn new(positions: &[Point]) -> SampleGrid {
         let n = positions.len().max(1);
         let (mut xmin, mut ymin, mut xmax, mut ymax) = (
             f64::INFINITY,
@@ -91,7 +91,7 @@ impl Grid {
             ys[o] = p[1];
             ids[o] = k as u32;
         }
-        Grid {
+        SampleGrid {
             x0: xmin,
             y0: ymin,
             inv_cs,
@@ -172,7 +172,7 @@ impl<const C: usize> Cands<C> {
     }
 
     /// Every sample within `reach` of `c` into `found` and `slots`, sorted.
-    fn collect(&mut self, g: &Grid, c: Point, reach: f64) {
+    fn collect(&mut self, g: &SampleGrid, c: Point, reach: f64) {
         let cell = |v: f64, o: f64, n: usize| {
             let f = ((v - o) * g.inv_cs).clamp(0.0, (n - 1) as f64);
             f as usize
@@ -223,7 +223,7 @@ impl<const C: usize> Cands<C> {
     ///
     /// A sample `j` among the 4 nearest of `p` is no farther from `p` than the 4 nearest of `c`
     /// are: `|p − j| ≤ D4(p) ≤ D4(c) + |p − c|`, so `|c − j| ≤ D4(c) + 2r`.
-    fn gather(&mut self, g: &Grid, colours: &[u8], c: Point, r: f64, d4: f64) {
+    fn gather(&mut self, g: &SampleGrid, colours: &[u8], c: Point, r: f64, d4: f64) {
         // Blocks far apart bound each other poorly: then start from a few spacings and widen.
         let guess = 2.0 * g.spacing();
         let d4 = if d4 > 0.0 && d4 <= guess { d4 } else { guess };
@@ -433,7 +433,7 @@ const BLOCK: f64 = 1.6;
 /// 65k sites, where a unit spans 16 / 8 spacings, blocks of 4 took 1 624 / 421 M
 /// instructions and single pixels take 290 / 259 M; from 16k, 4 spacings, single pixels
 /// would take 228 M against 126 M.)
-fn block_size(grid: &Grid, step: f64, unit: usize) -> usize {
+fn block_size(grid: &SampleGrid, step: f64, unit: usize) -> usize {
     let side = BLOCK * grid.spacing() / step;
     if !side.is_finite() {
         return unit;
@@ -445,7 +445,7 @@ fn block_size(grid: &Grid, step: f64, unit: usize) -> usize {
 }
 
 /// Renders by Shepard interpolation over `grid` into `frame`'s output.
-pub(crate) fn render(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
+pub(crate) fn render(grid: &SampleGrid, frame: &super::Output<'_>, parallel: bool) -> Vec<u8> {
     match frame.channels {
         1 => render_c::<1>(grid, frame, parallel),
         2 => render_c::<2>(grid, frame, parallel),
@@ -454,7 +454,11 @@ pub(crate) fn render(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> V
     }
 }
 
-fn render_c<const C: usize>(grid: &Grid, frame: &super::Frame<'_>, parallel: bool) -> Vec<u8> {
+fn render_c<const C: usize>(
+    grid: &SampleGrid,
+    frame: &super::Output<'_>,
+    parallel: bool,
+) -> Vec<u8> {
     let (w, h) = (frame.width, frame.height);
     let mut out = vec![0u8; w * h * C];
     let (bw, bh) = (block_size(grid, frame.sx, 4), block_size(grid, frame.sy, 4));
@@ -543,7 +547,7 @@ struct Block {
 #[inline(always)]
 fn shade_block<const C: usize>(
     cands: &Cands<C>,
-    frame: &super::Frame<'_>,
+    frame: &super::Output<'_>,
     block: &Block,
     w: usize,
     band: &mut [u8],

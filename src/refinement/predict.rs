@@ -39,7 +39,7 @@ fn low_gain(kernel: Kernel, w: usize, h: usize, levels: u32) -> i64 {
 }
 
 /// Points in a uniform grid, for exact nearest-neighbour queries.
-struct Grid {
+struct NearestGrid {
     cell: i64,
     gw: i64,
     gh: i64,
@@ -47,8 +47,8 @@ struct Grid {
     entries: Vec<([i64; 2], u32)>,
 }
 
-impl Grid {
-    fn new(points: &[[i64; 2]], width: i64, height: i64) -> Grid {
+impl NearestGrid {
+    fn new(points: &[[i64; 2]], width: i64, height: i64) -> NearestGrid {
         let area = (width as i128 * height as i128).max(1);
         let cell = (((2 * area) / points.len().max(1) as i128) as f64).sqrt() as i64;
         let cell = cell.max(POS_ONE);
@@ -74,7 +74,7 @@ impl Grid {
             entries[fill[k] as usize] = (p, i as u32);
             fill[k] += 1;
         }
-        Grid {
+        NearestGrid {
             cell,
             gw,
             gh,
@@ -158,7 +158,7 @@ pub(crate) fn low_band(
     let (lw, lh) = low_size(width, height, levels);
     let mut out = vec![Vec::with_capacity(lw * lh); channels];
     let values: Vec<[i32; 4]> = colours.chunks_exact(channels).map(coded_channels).collect();
-    let grid = Grid::new(positions, width as i64 * POS_ONE, height as i64 * POS_ONE);
+    let grid = NearestGrid::new(positions, width as i64 * POS_ONE, height as i64 * POS_ONE);
     let gain = low_gain(kernel, width, height, levels);
     let step = (1i64 << levels) * POS_ONE;
     for j in 0..lh as i64 {
@@ -216,7 +216,7 @@ mod tests {
             if n > 3 {
                 pts[2] = pts[1];
             }
-            let grid = Grid::new(&pts, w, h);
+            let grid = NearestGrid::new(&pts, w, h);
             for _ in 0..200 {
                 let q = [next(w), next(h)];
                 assert_eq!(grid.nearest(q), brute(&pts, q), "n {n} q {q:?}");

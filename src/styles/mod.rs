@@ -23,7 +23,7 @@
 //! assert_eq!(img.dimensions(), (128, 128));
 //! ```
 
-mod delaunay;
+mod graph;
 mod mosaic;
 mod order;
 mod phase;
@@ -31,7 +31,7 @@ mod spectrum;
 mod strokes;
 mod voronoi;
 
-pub use delaunay::{delaunay_graph, delaunay_over};
+pub use graph::{delaunay_graph, delaunay_over};
 pub use mosaic::mosaic;
 pub use order::{order, order_colour};
 pub use phase::{phase_contour, phase_level_set, phase_sites, phase_value, PhaseWindow};
@@ -42,7 +42,7 @@ pub use voronoi::voronoi;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation as _};
 
 use crate::lattice::ZZeta;
-use crate::reconstruction::{Cells, Triangulation as Mesh, Vertex};
+use crate::reconstruction::{Cells, SampleMesh as Mesh, Vertex};
 use crate::sites::Point;
 use crate::{Error, Result};
 
@@ -375,16 +375,16 @@ pub(crate) fn check(
 
 /// Source → output pixel scale.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Frame {
+pub(crate) struct Scale {
     pub sx: f64,
     pub sy: f64,
     pub w: u32,
     pub h: u32,
 }
 
-impl Frame {
+impl Scale {
     pub fn new(source: (u32, u32), output: (u32, u32)) -> Self {
-        Frame {
+        Scale {
             sx: output.0 as f64 / source.0 as f64,
             sy: output.1 as f64 / source.1 as f64,
             w: output.0,
@@ -485,7 +485,7 @@ pub(crate) fn fill_uncovered(
     covered: &[bool],
     tri: &Triangulation,
     colours: &[u8],
-    frame: &Frame,
+    frame: &Scale,
 ) {
     for j in 0..frame.h {
         for i in 0..frame.w {

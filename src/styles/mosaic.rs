@@ -2,7 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, colour, fill_convex, fill_uncovered, Frame, Sites, Triangulation, INK};
+use super::{check, colour, fill_convex, fill_uncovered, Scale, Sites, Triangulation, INK};
 use crate::Result;
 
 /// Mosaic: every cell is split at its edge midpoints; the triangle at each
@@ -27,7 +27,7 @@ pub fn mosaic<'a>(
     let sites = sites.into();
     let positions = sites.positions();
     check(positions, Some(colours), source, output)?;
-    let frame = Frame::new(source, output);
+    let frame = Scale::new(source, output);
     let mut img = RgbImage::new(output.0, output.1);
     let mut covered = vec![false; output.0 as usize * output.1 as usize];
     if positions.is_empty() {

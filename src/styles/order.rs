@@ -2,7 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, Frame};
+use super::{check, Scale};
 use crate::sites::Point;
 use crate::Result;
 
@@ -51,7 +51,7 @@ pub fn order_colour(t: f64) -> [u8; 3] {
 /// ```
 pub fn order(positions: &[Point], source: (u32, u32), output: (u32, u32)) -> Result<RgbImage> {
     check(positions, None, source, output)?;
-    let frame = Frame::new(source, output);
+    let frame = Scale::new(source, output);
     let mut img = RgbImage::from_pixel(output.0, output.1, Rgb([255, 255, 255]));
     let n = positions.len();
     if n == 0 {

@@ -2,7 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, colour, fill_convex, fill_uncovered, Frame, Sites, Triangulation};
+use super::{check, colour, fill_convex, fill_uncovered, Scale, Sites, Triangulation};
 use crate::Result;
 
 /// The sharpness [`strokes`] uses.
@@ -59,7 +59,7 @@ pub fn strokes_with<'a>(
     } else {
         DEFAULT_SHARPNESS
     };
-    let frame = Frame::new(source, output);
+    let frame = Scale::new(source, output);
     let mut img = RgbImage::new(output.0, output.1);
     let mut covered = vec![false; output.0 as usize * output.1 as usize];
     if positions.is_empty() {

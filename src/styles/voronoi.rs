@@ -2,7 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, colour, Frame, Sites, Triangulation, INK};
+use super::{check, colour, Scale, Sites, Triangulation, INK};
 use crate::Result;
 
 /// Voronoi diagram: each output pixel takes the colour of its nearest site, and
@@ -25,7 +25,7 @@ pub fn voronoi<'a>(
     let sites = sites.into();
     let positions = sites.positions();
     check(positions, Some(colours), source, output)?;
-    let frame = Frame::new(source, output);
+    let frame = Scale::new(source, output);
     let mut img = RgbImage::new(output.0, output.1);
     if positions.is_empty() {
         return Ok(img);

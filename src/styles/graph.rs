@@ -2,7 +2,7 @@
 
 use image::{Rgb, RgbImage};
 
-use super::{check, draw_line, Frame, Sites, Triangulation, INK};
+use super::{check, draw_line, Scale, Sites, Triangulation, INK};
 use crate::Result;
 
 /// The Delaunay edges (dark, 1 px) on a white background.
@@ -44,7 +44,7 @@ pub fn delaunay_over<'a>(
     let positions = sites.positions();
     let output = background.dimensions();
     check(positions, None, source, output)?;
-    let frame = Frame::new(source, output);
+    let frame = Scale::new(source, output);
     let mut img = background.clone();
     if positions.len() < 2 {
         return Ok(img);
