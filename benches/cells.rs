@@ -1,5 +1,5 @@
 //! Canonical Delaunay cells against spade's plain triangles: 1 Mpixel Gouraud render,
-//! single-threaded, same quasicrystal sites and colours (issue #11).
+//! single-threaded, same quasicrystal sites and colours.
 //!
 //! * `gouraud_plain`: samples pushed without exact points (spade's own split);
 //! * `gouraud_cells`: samples pushed with exact points, cells already computed (one-shot

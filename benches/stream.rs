@@ -1,6 +1,6 @@
 //! Streaming decode costs on `assets/rocket.png` (480 × 320, default encode options):
 //! cost per push (1 B, 64 B, 4 KiB chunks), the whole file byte by byte against one-shot
-//! `qcs::decode` (issue #5 asks for ≤ 2×; the ratio is printed), and preview renders at 256 × 256
+//! `qcs::decode` (the target is ≤ 2×; the ratio is printed), and preview renders at 256 × 256
 //! and at 1 Mpixel from 1 %, 10 % and 100 % of the file.
 //!
 //! Run: `cargo bench --bench stream -- --warm-up-time 1 --measurement-time 3`

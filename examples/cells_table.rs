@@ -1,4 +1,4 @@
-//! Canonical Delaunay cells (issue #11): cell statistics, Gouraud PSNR of the centroid rule
+//! Canonical Delaunay cells: cell statistics, Gouraud PSNR of the centroid rule
 //! against `spade`'s own split, monotone sharpening, and a census of the local configurations
 //! (the premise of a triangulation that would look them up rather than compute them, #4).
 //!

@@ -1,4 +1,4 @@
-//! Canonical Delaunay cells (issue #11): exact predicates, uniqueness of the cells, and a
+//! Canonical Delaunay cells: exact predicates, uniqueness of the cells, and a
 //! Gouraud picture that depends on the samples only.
 
 use qcs::lattice::{incircle, incircle_value, orient, ZTau, ZZeta};
