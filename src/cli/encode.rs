@@ -181,8 +181,9 @@ impl Encoded {
         if let Some((at, layers)) = self.refinement {
             let _ = write!(
                 s,
-                "levels in bytes 0..{at}, then a refinement of {} bytes in {layers} layers; ",
-                self.output.saturating_sub(at)
+                "levels in bytes 0..{at}, then a refinement of {} bytes in {layers} layer{}; ",
+                self.output.saturating_sub(at),
+                if layers == 1 { "" } else { "s" }
             );
         }
         let _ = write!(s, "{} bytes", self.output);

@@ -1,107 +1,65 @@
-//! ICC colour profiles: whether one describes sRGB (which a file without one means).
+//! ICC colour profiles: whether one draws sRGB's colours (which a file without one means).
+//!
+//! Profiles are read with `moxcms`, the colour management crate `image` itself uses.
 
-/// Whether an ICC profile describes sRGB (an RGB profile whose description names it, as
-/// "sRGB IEC61966-2.1" or "sRGB built-in" do): storing it would only repeat what a file
-/// without a profile means. Reads the `desc` tag, ICC v2 (`desc`) or v4 (`mluc`, UTF-16).
+use moxcms::{ColorProfile, DataColorSpace, Layout, TransformOptions};
+
+/// Whether an ICC profile draws the colours sRGB draws: an RGB profile whose transform to sRGB
+/// moves no colour of an 9×9×9 grid of 8-bit RGB by more than 2 levels. Storing such a profile
+/// would only repeat what a file without one means. Judged by what the profile does, not by
+/// its name: "sRGB2014" or a camera's own sRGB profile count, a profile merely named "sRGB" does
+/// not. A profile that does not parse is not sRGB.
 pub fn is_srgb(icc: &[u8]) -> bool {
-    let u32_at = |at: usize| -> Option<usize> {
-        let b = icc.get(at..at.checked_add(4)?)?;
-        Some(u32::from_be_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    let Ok(profile) = ColorProfile::new_from_slice(icc) else {
+        return false;
     };
-    let desc = || -> Option<String> {
-        if icc.get(16..20)? != b"RGB " {
-            return None;
-        }
-        let tags = u32_at(128)?;
-        let (at, len) = (0..tags.min(1024)).find_map(|i| {
-            let e = 132 + 12 * i;
-            if icc.get(e..e + 4)? != b"desc" {
-                return None;
-            }
-            Some((u32_at(e + 4)?, u32_at(e + 8)?))
-        })?;
-        let tag = icc.get(at..at.checked_add(len)?)?;
-        match tag.get(..4)? {
-            b"desc" => {
-                let n = u32_at(at + 8)?;
-                Some(String::from_utf8_lossy(tag.get(12..12usize.checked_add(n)?)?).into())
-            }
-            b"mluc" => {
-                // The first record: its length and offset from the tag's start.
-                let (n, off) = (u32_at(at + 20)?, u32_at(at + 24)?);
-                let text = tag.get(off..off.checked_add(n)?)?;
-                let units = text
-                    .chunks_exact(2)
-                    .map(|c| u16::from_be_bytes([c[0], c[1]]));
-                Some(
-                    char::decode_utf16(units)
-                        .map(|c| c.unwrap_or('?'))
-                        .collect(),
-                )
-            }
-            _ => None,
-        }
+    if profile.color_space != DataColorSpace::Rgb {
+        return false;
+    }
+    let to_srgb = profile.create_transform_8bit(
+        Layout::Rgb,
+        &ColorProfile::new_srgb(),
+        Layout::Rgb,
+        TransformOptions::default(),
+    );
+    let Ok(to_srgb) = to_srgb else {
+        return false;
     };
-    desc().is_some_and(|d| d.contains("sRGB"))
+    let grid: Vec<u8> = (0..9 * 9 * 9u32)
+        .flat_map(|i| [i / 81, i / 9 % 9, i % 9].map(|v| (v * 255 / 8) as u8))
+        .collect();
+    let mut out = vec![0; grid.len()];
+    to_srgb.transform(&grid, &mut out).is_ok()
+        && grid.iter().zip(&out).all(|(a, b)| a.abs_diff(*b) <= 2)
 }
 
 #[cfg(test)]
 mod tests {
     use super::is_srgb;
+    use moxcms::ColorProfile;
 
-    /// A minimal RGB profile whose only tag is `desc`, holding `tag`.
-    fn profile(tag: &[u8]) -> Vec<u8> {
-        let mut p = vec![0u8; 128];
-        p[16..20].copy_from_slice(b"RGB ");
-        p.extend_from_slice(&1u32.to_be_bytes());
-        p.extend_from_slice(b"desc");
-        p.extend_from_slice(&144u32.to_be_bytes());
-        p.extend_from_slice(&(tag.len() as u32).to_be_bytes());
-        p.extend_from_slice(tag);
-        p
-    }
-
-    /// A v2 `desc` tag.
-    fn v2(text: &str) -> Vec<u8> {
-        let mut t = b"desc\0\0\0\0".to_vec();
-        t.extend_from_slice(&(text.len() as u32 + 1).to_be_bytes());
-        t.extend_from_slice(text.as_bytes());
-        t.push(0);
-        profile(&t)
-    }
-
-    /// A v4 `mluc` tag with one record.
-    fn v4(text: &str) -> Vec<u8> {
-        let utf16: Vec<u8> = text.encode_utf16().flat_map(u16::to_be_bytes).collect();
-        let mut t = b"mluc\0\0\0\0".to_vec();
-        for n in [1u32, 12] {
-            t.extend_from_slice(&n.to_be_bytes());
-        }
-        t.extend_from_slice(b"enUS");
-        t.extend_from_slice(&(utf16.len() as u32).to_be_bytes());
-        t.extend_from_slice(&28u32.to_be_bytes());
-        t.extend_from_slice(&utf16);
-        profile(&t)
+    fn bytes(p: ColorProfile) -> Vec<u8> {
+        p.encode().expect("moxcms writes its own profiles")
     }
 
     #[test]
-    fn srgb_profiles_are_recognised_by_their_description() {
-        assert!(is_srgb(&v2("sRGB IEC61966-2.1")));
-        assert!(is_srgb(&v4("sRGB built-in")));
-        assert!(!is_srgb(&v2("Display P3")));
-        assert!(!is_srgb(&v4("Adobe RGB (1998)")));
-        // A grey profile is not sRGB whatever it says.
-        let mut grey = v2("sRGB");
-        grey[16..20].copy_from_slice(b"GRAY");
-        assert!(!is_srgb(&grey));
+    fn srgb_profiles_are_recognised_by_their_colours() {
+        let srgb = bytes(ColorProfile::new_srgb());
+        assert!(is_srgb(&srgb));
+        assert!(!is_srgb(&bytes(ColorProfile::new_display_p3())));
+        assert!(!is_srgb(&bytes(ColorProfile::new_adobe_rgb())));
+        assert!(!is_srgb(&bytes(ColorProfile::new_bt2020())));
+        assert!(!is_srgb(&bytes(ColorProfile::new_gray_with_gamma(2.2))));
         // Cut or garbled profiles are not sRGB (and do not panic).
-        let whole = v4("sRGB built-in");
-        for n in 0..whole.len() {
-            assert!(!is_srgb(&whole[..n]), "cut at {n}");
+        for n in 0..srgb.len() {
+            let _ = is_srgb(&srgb[..n]);
         }
-        let mut far = v2("sRGB");
-        far[136..140].copy_from_slice(&u32::MAX.to_be_bytes());
-        assert!(!is_srgb(&far));
+        assert!(!is_srgb(&srgb[..srgb.len() / 2]));
+        let mut flipped = srgb.clone();
+        for i in (0..flipped.len()).step_by(7) {
+            flipped[i] ^= 0x5A;
+            let _ = is_srgb(&flipped);
+        }
         assert!(!is_srgb(b"not a profile"));
     }
 }
