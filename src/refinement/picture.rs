@@ -10,7 +10,7 @@ use super::bitplane::{BandState, StreamState};
 use super::resample::Axis;
 use super::schedule::Orient;
 use super::wavelet::{
-    inverse, inverse_but_rows, inverse_row_into, low_size, synthesise_rows, Kernel,
+    inverse, inverse_but_rows, inverse_row_into, low_size, splits, synthesise_rows, Kernel,
 };
 use rayon::prelude::*;
 use std::borrow::Borrow;
@@ -86,7 +86,7 @@ pub(crate) const LOW_GAIN_97_INVERSE: [i64; 31] = [
 pub(crate) fn low_gain_inverse(kernel: Kernel, w: usize, h: usize, levels: u32) -> i64 {
     match kernel {
         Kernel::Reversible53 => 1 << 16,
-        Kernel::Integer97 => LOW_GAIN_97_INVERSE[super::predict::splits(w, h, levels) as usize],
+        Kernel::Integer97 => LOW_GAIN_97_INVERSE[splits(w, h, levels) as usize],
     }
 }
 

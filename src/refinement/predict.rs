@@ -9,7 +9,7 @@
 use crate::coding::predictive::{weighted_mean, weights, NEIGHBOURS, POS_ONE};
 
 use super::picture::coded_channels;
-use super::wavelet::{low_size, Kernel};
+use super::wavelet::{low_size, splits, Kernel};
 
 /// The gain on a constant of n one-dimensional splits of the integer 9/7, 16.16 fixed point,
 /// for n = 0..=30: round(2^16 · g^n), g = 1.2298828545 (see
@@ -19,17 +19,6 @@ const GAIN_97: [i64; 31] = [
     784955, 965403, 1187333, 1460280, 1795973, 2208837, 2716611, 3341113, 4109177, 5053807,
     6215590, 7644448, 9401775, 11563082, 14221236, 17490455, 21511211, 26456269, 32538112,
 ];
-
-/// The one-dimensional splits `levels` levels make of a `w × h` plane: a side of 1 is left
-/// as it is (a line shorter than 2 has no high half), so it adds no gain.
-pub(crate) fn splits(w: usize, h: usize, levels: u32) -> u32 {
-    (0..levels)
-        .map(|l| {
-            let (cw, ch) = low_size(w, h, l);
-            (cw >= 2) as u32 + (ch >= 2) as u32
-        })
-        .sum()
-}
 
 fn low_gain(kernel: Kernel, w: usize, h: usize, levels: u32) -> i64 {
     match kernel {

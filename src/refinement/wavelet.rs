@@ -259,6 +259,17 @@ fn inverse_columns(
     }
 }
 
+/// The one-dimensional splits `levels` levels make of a `w × h` plane: a side of 1 is left
+/// as it is (a line shorter than 2 has no high half), so it adds no gain.
+pub(crate) fn splits(w: usize, h: usize, levels: u32) -> u32 {
+    (0..levels)
+        .map(|l| {
+            let (cw, ch) = low_size(w, h, l);
+            (cw >= 2) as u32 + (ch >= 2) as u32
+        })
+        .sum()
+}
+
 /// The size of the low-low region after `levels` levels of a `w × h` region.
 pub(crate) fn low_size(w: usize, h: usize, levels: u32) -> (usize, usize) {
     let mut s = (w, h);
