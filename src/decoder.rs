@@ -180,20 +180,30 @@ impl StreamDecoder {
     /// Running out of bytes is never an error. A damaged file is an error, unless recovery was
     /// asked for; the decoder is then poisoned: every later push is [`Error::Poisoned`].
     pub fn push(&mut self, bytes: &[u8]) -> Result<()> {
+        let (events, parsed) = self.parse(bytes)?;
+        let r = self.apply_events(&events, parsed);
+        self.events = events;
+        r
+    }
+
+    /// The parser's events for `bytes`, not yet applied, and how its push ended.
+    fn parse(&mut self, bytes: &[u8]) -> Result<(Vec<Event>, Result<()>)> {
         if self.failed {
             return Err(Error::Poisoned {
                 object: "StreamDecoder",
             });
         }
-        self.events.clear();
-        let r = self.parser.push(bytes, &mut self.events);
-        let events = std::mem::take(&mut self.events);
-        let applied = events.iter().try_for_each(|e| self.apply(e));
-        self.events = events;
-        // An error from `apply` (e.g. a header the site construction cannot use) leaves the
-        // parser ahead of this decoder: poison it, or the next push would see levels without
-        // a header.
-        let r = applied.and(r);
+        let mut events = std::mem::take(&mut self.events);
+        events.clear();
+        let parsed = self.parser.push(bytes, &mut events);
+        Ok((events, parsed))
+    }
+
+    /// Applies `events` from [`Self::parse`], then reports how the parse ended. An error (from
+    /// either, e.g. a header the site construction cannot use) leaves the parser ahead of this
+    /// decoder: it poisons it, or the next push would see levels without a header.
+    fn apply_events(&mut self, events: &[Event], parsed: Result<()>) -> Result<()> {
+        let r = events.iter().try_for_each(|e| self.apply(e)).and(parsed);
         if r.is_err() {
             self.failed = true;
         }
@@ -875,45 +885,51 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     Ok(shrink(d, f))
 }
 
-/// Pushes `bytes` (a whole buffer) into the fresh decoder `dec`, the sites of the levels
-/// present (up to the one holding sample `max_samples`, where `dec` stops decoding) computed
-/// once up front. If `build_cells`, meanwhile, on another thread of the pool,
-/// the cells of the samples that are surely there (those of the verified levels, at most
-/// `max_samples`) are built: the cells depend only on the header, so they need not wait for
-/// the colours. The header goes first, so that its limits hold before any work.
+/// Pushes `bytes` (a whole buffer) into the fresh decoder `dec`, parsing them once: the parser
+/// reads the whole buffer (its limits checked at the header, before any work) before its
+/// events are applied, so that the sites of the levels present (up to the one holding sample
+/// `max_samples`, where `dec` stops decoding) are computed at once. If `build_cells`,
+/// meanwhile, on another thread of the pool, the cells of the samples that are surely there
+/// (those of the verified levels, at most `max_samples`) are built: the cells depend only on
+/// the header, so they need not wait for the colours.
 fn push_whole(
     dec: &mut StreamDecoder,
     bytes: &[u8],
     max_samples: u64,
     build_cells: bool,
 ) -> Result<Option<SampleSet>> {
-    let head = Header::parse(bytes).map_or(0, |(_, len)| len);
-    dec.push(&bytes[..head])?;
+    let (events, parsed) = dec.parse(bytes)?;
+    let heads = events
+        .iter()
+        .take_while(|e| matches!(e, Event::Header(_)))
+        .count();
+    let (head, rest) = events.split_at(heads);
+    dec.apply_events(head, Ok(()))?;
     let (Some(h), Some(seq)) = (dec.header().cloned(), dec.seq) else {
-        dec.push(&bytes[head..])?;
-        return Ok(None);
+        return dec.apply_events(rest, parsed).map(|_| None);
     };
-    let found = crate::container::inspect(bytes);
-    let present = (found.levels.iter())
-        .filter(|l| l.chunk.is_some())
-        .map(|l| l.samples.end)
+    let present = (rest.iter())
+        .filter_map(|e| match e {
+            Event::LevelStart { samples, .. } => Some(samples.end),
+            _ => None,
+        })
         .max()
         .unwrap_or(0)
         .min(h.total_samples);
-    // The levels that start at or after `max_samples` are only verified (`ParserOptions::max_samples`).
+    // The levels that start at or after `max_samples` are only verified (`max_samples`).
     let present = present.min(h.samples_of_levels_before(max_samples)) as usize;
     // The levels' colours need their sites' positions, the cells the sites.
     dec.sites = Arc::new(seq.first(present));
     if !build_cells {
-        dec.push(&bytes[head..])?;
-        return Ok(None);
+        return dec.apply_events(rest, parsed).map(|_| None);
     }
-    let sure = found.samples_verified.min(max_samples).min(present as u64) as usize;
+    let verified = dec.parser.progress().samples_verified;
+    let sure = verified.min(max_samples).min(present as u64) as usize;
     let mut set = dec.new_set(&h);
     let blank = vec![0; dec.channels()];
     let sites = Arc::clone(&dec.sites);
     let (pushed, seed) = rayon::join(
-        || dec.push(&bytes[head..]),
+        || dec.apply_events(rest, parsed),
         move || {
             // Room for every sample present: the render adds those beyond `sure`.
             set.reserve(present);
