@@ -627,8 +627,15 @@ fn replay_fuzz_regressions() {
 #[test]
 fn vectors_through_every_harness() {
     for (_, file) in vectors() {
-        // The harnesses take control bytes first (see qcs::fuzzing).
-        for ctl in [&[16u8, 12, 0][..], &[63, 1, 0x81], &[5, 40, 2]] {
+        // The harnesses take control bytes first (see qcs::fuzzing): the last two also decode
+        // with recovery (0x40 in the second byte) and on two threads (0x20 in the third).
+        for ctl in [
+            &[16u8, 12, 0][..],
+            &[63, 1, 0x81],
+            &[5, 40, 2],
+            &[16, 0x4C, 0x20],
+            &[9, 0x47, 0x61],
+        ] {
             let mut d = ctl.to_vec();
             d.extend_from_slice(&file);
             let pic = qcs::fuzzing::decode(&d).expect("vector decodes");
