@@ -916,7 +916,7 @@ fn push_whole(
         .max()
         .unwrap_or(0)
         .min(h.total_samples);
-    // The levels that start at or after `max_samples` are only verified (`max_samples`).
+    // The levels that start at or after `max_samples` are only verified (`ParserOptions::max_samples`).
     let present = present.min(h.samples_of_levels_before(max_samples)) as usize;
     // The levels' colours need their sites' positions, the cells the sites.
     dec.sites = Arc::new(seq.first(present));
