@@ -374,7 +374,7 @@ fn bundled_photo_is_what_the_readme_says() {
     let d = decode(&bytes, &DecodeOptions::default()).unwrap();
     let p = psnr(&img.to_rgb8(), &d.image.to_rgb8());
     assert_eq!(bytes.len(), 15_338, "rocket.qcs");
-    assert!((p - 36.28).abs() < 0.005, "rocket: {p:.3} dB");
+    assert!((p - 36.30).abs() < 0.005, "rocket: {p:.3} dB");
 }
 
 /// A one-shot Gouraud decode on a pool with threads to spare builds the cells of the verified

@@ -65,17 +65,21 @@ def to_coded(colour, layout):
     return out
 
 
-def from_coded(vals, layout):
-    """Coded channel values (not centred) -> layout channels, inverse YCoCg-R, clamped (§8)."""
+def from_coded(vals, layout, F=0):
+    """Coded channel values (not centred, F fraction bits) -> layout channels: inverse
+    YCoCg-R on the fixed-point values, then each channel rounded to a whole level (halves
+    up) and clamped (§8)."""
+    def level(v):
+        return max(0, min(255, (v + ((1 << F) >> 1)) >> F))
     if layout < 2:
-        return tuple(max(0, min(255, v)) for v in vals)
+        return tuple(level(v) for v in vals)
     Y, Co, Cg = vals[0], vals[1], vals[2]
     t = Y - (Cg >> 1)
     G = Cg + t
     B = t - (Co >> 1)
     R = B + Co
     out = [R, G, B] + ([vals[3]] if layout == 3 else [])
-    return tuple(max(0, min(255, v)) for v in out)
+    return tuple(level(v) for v in out)
 
 
 # ---------------------------------------------------------------------------
@@ -544,16 +548,15 @@ def refined_picture(h, colours, stats=None):
                 plane[j * W + i] = wrap32(plane[j * W + i] + pred[c][j][i])
         inverse_2d(plane, W, H, L, ref.wavelet)
         planes.append(plane)
-    half = (1 << F) >> 1
     rows = []
     for y in range(H):
         row = []
         for x in range(W):
             vals = []
             for c, (centred, _cls, _w) in enumerate(coded):
-                e = (planes[c][y * W + x] + half) >> F
-                vals.append(e + 128 if centred else e)
-            row.append(from_coded(vals, layout))
+                v = planes[c][y * W + x]
+                vals.append(v + (128 << F) if centred else v)
+            row.append(from_coded(vals, layout, F))
         rows.append(row)
     return rows
 

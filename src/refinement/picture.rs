@@ -50,25 +50,28 @@ pub(crate) fn coded_channels(px: &[u8]) -> [i32; 4] {
     out
 }
 
-/// Coded channel values (centred, integer) → a pixel's layout values, clamped to 0..=255.
+/// Coded channel values (centred, with `f` fraction bits) → a pixel's layout values: YCoCg-R
+/// undone on the fixed-point values, then each layout channel rounded to nearest (halves up)
+/// and clamped to 0..=255, so that the channels' fractions are not rounded separately first.
 #[inline]
-fn layout_values(coded: &[i32], out: &mut [u8]) {
-    let clamp = |v: i64| v.clamp(0, 255) as u8;
+fn layout_values(coded: &[i32], out: &mut [u8], f: u32) {
+    let level = |v: i64| ((v + ((1 << f) >> 1)) >> f).clamp(0, 255) as u8;
+    let centre = 128i64 << f;
     let coded: [i64; 4] = std::array::from_fn(|c| coded.get(c).copied().unwrap_or(0) as i64);
     if out.len() >= 3 {
-        let t = coded[0] + 128 - (coded[2] >> 1);
+        let t = coded[0] + centre - (coded[2] >> 1);
         let g = coded[2] + t;
         let b = t - (coded[1] >> 1);
         let r = b + coded[1];
-        out[0] = clamp(r);
-        out[1] = clamp(g);
-        out[2] = clamp(b);
+        out[0] = level(r);
+        out[1] = level(g);
+        out[2] = level(b);
         if out.len() == 4 {
-            out[3] = clamp(coded[3] + 128);
+            out[3] = level(coded[3] + centre);
         }
     } else {
         for (o, &v) in out.iter_mut().zip(&coded) {
-            *o = clamp(v + 128);
+            *o = level(v + centre);
         }
     }
 }
@@ -233,7 +236,8 @@ fn transpose(m: &[i32], w: usize) -> Vec<i32> {
 }
 
 /// The division of a plane of the picture of level `level` (2^frac · gain(level) times the
-/// pixels') by 2^frac · gain, rounding to nearest (halves up).
+/// pixels') by gain, rounding to nearest (halves up): values with `frac` fraction bits, which
+/// [`layout_values`] rounds to whole levels after undoing YCoCg-R.
 #[derive(Clone, Copy)]
 struct Normalise {
     inverse_gain: i64,
@@ -250,16 +254,10 @@ impl Normalise {
 
     /// `out[i]` = `values[i]` divided.
     fn apply(self, values: &[i32], out: &mut [i32]) {
-        let pairs = out.iter_mut().zip(values);
-        let f = self.frac;
         if self.inverse_gain != 1 << 16 {
-            let shift = 16 + f;
-            let round = 1i64 << (shift - 1);
             let g = self.inverse_gain;
-            pairs.for_each(|(o, &v)| *o = ((v as i64 * g + round) >> shift) as i32);
-        } else if f > 0 {
-            // The same in 32 bits: ⌊(v + 2^(f−1)) / 2^f⌋ = (v >> f) + bit f − 1 of v.
-            pairs.for_each(|(o, &v)| *o = (v >> f) + ((v >> (f - 1)) & 1));
+            (out.iter_mut().zip(values))
+                .for_each(|(o, &v)| *o = ((v as i64 * g + (1 << 15)) >> 16) as i32);
         } else {
             out.copy_from_slice(values);
         }
@@ -313,7 +311,7 @@ fn interleave(
                         };
                         norm.apply(values, &mut v[..len]);
                     }
-                    layout_run::<N>(&coded, px);
+                    layout_run::<N>(&coded, px, norm.frac);
                 }
             });
     }
@@ -334,7 +332,7 @@ fn interleave(
 
 /// [`layout_values`] for a run of pixels (`out.len() / N` of them), in 32 bits when every
 /// value is below 2^24 in magnitude (where no step can overflow), as the compiler vectorises.
-fn layout_run<const N: usize>(coded: &[[i32; RUN]; N], out: &mut [u8]) {
+fn layout_run<const N: usize>(coded: &[[i32; RUN]; N], out: &mut [u8], f: u32) {
     let len = out.len() / N;
     let bits = coded
         .iter()
@@ -343,33 +341,35 @@ fn layout_run<const N: usize>(coded: &[[i32; RUN]; N], out: &mut [u8]) {
     if bits >= 1 << 24 {
         for (i, px) in out.chunks_exact_mut(N).enumerate() {
             let values: [i32; N] = std::array::from_fn(|c| coded[c][i]);
-            layout_values(&values, px);
+            layout_values(&values, px, f);
         }
         return;
     }
-    let clamp = |v: i32| v.clamp(0, 255) as u8;
+    let half = (1 << f) >> 1;
+    let centre = 128 << f;
+    let level = |v: i32| ((v + half) >> f).clamp(0, 255) as u8;
     if N >= 3 {
         let mut rgb = [[0u8; RUN]; 3];
         for i in 0..len {
             let (y, co, cg) = (coded[0][i], coded[1][i], coded[2][i]);
-            let t = y + 128 - (cg >> 1);
+            let t = y + centre - (cg >> 1);
             let b = t - (co >> 1);
-            rgb[0][i] = clamp(b + co);
-            rgb[1][i] = clamp(cg + t);
-            rgb[2][i] = clamp(b);
+            rgb[0][i] = level(b + co);
+            rgb[1][i] = level(cg + t);
+            rgb[2][i] = level(b);
         }
         for (i, px) in out.chunks_exact_mut(N).enumerate() {
             px[0] = rgb[0][i];
             px[1] = rgb[1][i];
             px[2] = rgb[2][i];
             if N == 4 {
-                px[3] = clamp(coded[N - 1][i] + 128);
+                px[3] = level(coded[N - 1][i] + centre);
             }
         }
     } else {
         for (i, px) in out.chunks_exact_mut(N).enumerate() {
             for (c, o) in px.iter_mut().enumerate() {
-                *o = clamp(coded[c][i] + 128);
+                *o = level(coded[c][i] + centre);
             }
         }
     }
@@ -390,7 +390,7 @@ mod tests {
             for n in 1..=4 {
                 let c = coded_channels(&px[..n]);
                 let mut back = [0u8; 4];
-                layout_values(&c[..n], &mut back[..n]);
+                layout_values(&c[..n], &mut back[..n], 0);
                 assert_eq!(back[..n], px[..n], "{n} channels");
             }
         }
@@ -400,7 +400,7 @@ mod tests {
     /// from the 2^24 bound and at the extremes a hostile file reaches.
     #[test]
     fn runs_convert_as_single_pixels_do() {
-        fn check<const N: usize>(seed: &mut u64, scale: u32) {
+        fn check<const N: usize>(seed: &mut u64, scale: u32, f: u32) {
             let mut coded = [[0i32; RUN]; N];
             for c in coded.iter_mut() {
                 for v in c.iter_mut() {
@@ -413,20 +413,22 @@ mod tests {
             }
             let len = RUN - 3;
             let mut run = vec![0u8; N * len];
-            layout_run::<N>(&coded, &mut run);
+            layout_run::<N>(&coded, &mut run, f);
             for (i, px) in run.chunks_exact(N).enumerate() {
                 let values: [i32; N] = std::array::from_fn(|c| coded[c][i]);
                 let mut one = [0u8; N];
-                layout_values(&values, &mut one);
-                assert_eq!(px, one, "{N} channels, scale {scale}, pixel {i}");
+                layout_values(&values, &mut one, f);
+                assert_eq!(px, one, "{N} channels, scale {scale}, f {f}, pixel {i}");
             }
         }
         let mut seed = 1;
         for scale in [4, 8, 9, 12, 23, 24, 25, 31] {
-            check::<1>(&mut seed, scale);
-            check::<2>(&mut seed, scale);
-            check::<3>(&mut seed, scale);
-            check::<4>(&mut seed, scale);
+            for f in [0, 2] {
+                check::<1>(&mut seed, scale, f);
+                check::<2>(&mut seed, scale, f);
+                check::<3>(&mut seed, scale, f);
+                check::<4>(&mut seed, scale, f);
+            }
         }
     }
 
