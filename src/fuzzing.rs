@@ -645,8 +645,10 @@ fn roundtrip_on_one_thread(data: &[u8]) {
             // Levels of 6 bits or fewer are already 2 or more off, and a quality codes only
             // the passes its threshold pays for: the check holds for finer levels. The base is
             // within 1 of the constant; the lossy 9/7 refinement may round one more
-            // (regression `constant-21x3-7bit-quality-55`: 157 from the levels for 156, and
-            // the 9/7's fixed-point rounding draws 158 on alternate pixels of the middle row).
+            // (regressions `constant-21x3-7bit-quality-55`: 157 from the levels for 156, and
+            // the 9/7's fixed-point rounding draws 158 on alternate pixels of the middle row;
+            // `constant-16x23-7bit-quality-89`, which was 3 off before the picture undid
+            // YCoCg-R before rounding).
             Target::Quality(q) if constant && q >= 50 && bits >= 7 => assert!(
                 got.iter()
                     .zip(pixels.iter())
