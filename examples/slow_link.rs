@@ -27,7 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         }
         let picture = decoder.render(Method::Gouraud, w, h)?; // a preview at any moment
-        let psnr = qcs::eval::psnr(&reference, &picture.decoded().image.to_rgb8())?;
+        let psnr = qcs_lab::eval::psnr(&reference, &picture.decoded().image.to_rgb8())?;
         println!(
             "{:>6} {:>9} {:>8} {:>8.2}  {}",
             tick + 1,

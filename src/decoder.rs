@@ -1,7 +1,10 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
+// A second, levels-only decoder that cross-checks this one: for the fuzz harness and the tests.
+#[cfg(any(feature = "internals", fuzzing, feature = "fuzzing"))]
 mod raw;
 
+#[cfg(any(feature = "internals", fuzzing, feature = "fuzzing"))]
 pub use raw::RawDecoder;
 
 use std::sync::Arc;
@@ -135,7 +138,7 @@ impl StreamDecoder {
     /// applies to those levels, not to the file's count.
     ///
     /// ```
-    /// use qcs::container::ParserOptions;
+    /// use qcs::format::ParserOptions;
     /// use qcs::{Method, StreamDecoder};
     /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x * y) as u8])));
     /// // A file of levels only: one sample per 4 pixels.

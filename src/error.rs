@@ -52,7 +52,7 @@ pub enum Error {
         expected: String,
     },
     /// A stateful object was called out of turn: a
-    /// [`ContainerWriter`](crate::container::ContainerWriter) given a level, layer or profile
+    /// `ContainerWriter` given a level, layer or profile
     /// it cannot take at that point (or finished early), a level decoder given bytes before
     /// its level began. Blame: the caller's code.
     #[error("{object}: {reason}")]

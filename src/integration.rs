@@ -30,10 +30,7 @@ fn to_image_error(e: Error) -> ImageError {
 /// ```
 /// use image::ImageDecoder;
 /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(16, 8, image::Rgb([9, 99, 199])));
-/// let lossless = qcs::EncodeOptions {
-///     coding: qcs::coding::predictive::Params::lossless().coding(),
-///     ..Default::default()
-/// };
+/// let lossless = qcs::EncodeOptions { target: qcs::Target::Lossless, ..Default::default() };
 /// let bytes = qcs::encode(&img, &lossless)?;
 /// let dec = qcs::QcsImageDecoder::new(std::io::Cursor::new(bytes))?;
 /// assert_eq!(dec.dimensions(), (16, 8));
@@ -150,10 +147,7 @@ impl ImageDecoder for QcsImageDecoder {
 /// qcs::register_image_hooks();
 /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_pixel(8, 8, image::Luma([77])));
 /// let path = std::env::temp_dir().join("qcs-doc-hook.qcs");
-/// let lossless = qcs::EncodeOptions {
-///     coding: qcs::coding::predictive::Params::lossless().coding(),
-///     ..Default::default()
-/// };
+/// let lossless = qcs::EncodeOptions { target: qcs::Target::Lossless, ..Default::default() };
 /// std::fs::write(&path, qcs::encode(&img, &lossless)?)?;
 /// let back = image::open(&path)?;
 /// assert_eq!(back.to_luma8().get_pixel(4, 4).0, [77]);

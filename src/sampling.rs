@@ -40,7 +40,7 @@ pub enum SampleColour {
     /// (side `√(W·H/N)` centred on the site).
     Area,
     /// Mean over a box scaled to the area the site covers when it first appears: the k-th site
-    /// (0-based) averages a box of side `0.4·√(W·H/(k+1))` ([`PROGRESSIVE_SCALE`]), never
+    /// (0-based) averages a box of side `0.4·√(W·H/(k+1))` (`PROGRESSIVE_SCALE`), never
     /// smaller than [`Self::Area`]'s.
     /// Early samples are prefiltered for the sparse preview they belong to.
     Progressive,
@@ -50,16 +50,16 @@ pub enum SampleColour {
     /// samples 16..32, 32..64, 64..127, 127..254, 254..508 and so on (the first 16 keep their
     /// progressive colours). Once a stretch has its progressive colours, the encoder renders
     /// the samples so far (Gouraud at the source size) and adds to each of the stretch's
-    /// colours [`FIT_SHARE`] × the mean of (image − render) over a box [`FIT_BOX`] times the
+    /// colours `FIT_SHARE` × the mean of (image − render) over a box `FIT_BOX` times the
     /// progressive one: one damped back-projection step towards the colours whose picture
-    /// matches the image best. Only the stretches within the first [`FIT_SAMPLES`] samples are
-    /// corrected, and an image above [`FIT_PIXELS`] pixels is compared at a reduced size, so
+    /// matches the image best. Only the stretches within the first `FIT_SAMPLES` samples are
+    /// corrected, and an image above `FIT_PIXELS` pixels is compared at a reduced size, so
     /// that the cost stays bounded.
     ///
     /// The correction is open loop: the render uses the earlier samples' corrected colours,
     /// not their decoded ones, so that it undoes the interpolation's error and not the
     /// quantiser's (which, fed back, put isolated bright dots in flat skies). It needs the
-    /// level structure, so [`SourceImage::fitted`] computes it; [`SourceImage::colours`]
+    /// level structure, so `SourceImage::fitted` computes it; `SourceImage::colours`
     /// gives the progressive colours for this rule.
     #[default]
     Fitted,

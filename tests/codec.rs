@@ -17,7 +17,7 @@ fn photo(name: &str) -> image::DynamicImage {
 }
 
 fn psnr(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
-    qcs::eval::psnr(a, b).unwrap()
+    qcs_lab::eval::psnr(a, b).unwrap()
 }
 
 #[test]

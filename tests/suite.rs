@@ -5,14 +5,10 @@
 
 #[path = "cells.rs"]
 mod cells;
-#[path = "cli.rs"]
-mod cli;
 #[path = "codec.rs"]
 mod codec;
 #[path = "container.rs"]
 mod container;
-#[path = "eval.rs"]
-mod eval;
 #[path = "rate.rs"]
 mod rate;
 #[path = "reconstruction.rs"]
@@ -25,8 +21,6 @@ mod robustness;
 mod sites;
 #[path = "streaming.rs"]
 mod streaming;
-#[path = "styles.rs"]
-mod styles;
 #[path = "vectors.rs"]
 mod vectors;
 

@@ -58,7 +58,7 @@ impl Layout {
     /// Number of channels per sample (the layout byte).
     ///
     /// ```
-    /// assert_eq!(qcs::container::Layout::Rgb.channels(), 3);
+    /// assert_eq!(qcs::format::Layout::Rgb.channels(), 3);
     /// ```
     pub fn channels(self) -> u8 {
         self as u8
@@ -67,7 +67,7 @@ impl Layout {
     /// The layout with this many channels, if any.
     ///
     /// ```
-    /// use qcs::container::Layout;
+    /// use qcs::format::Layout;
     /// assert_eq!(Layout::from_channels(4), Some(Layout::Rgba));
     /// assert_eq!(Layout::from_channels(5), None);
     /// ```
@@ -86,12 +86,12 @@ impl Layout {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Coding {
     /// Coding 0: every channel value quantised to `bits` (1..=8) bits, packed MSB-first
-    /// (see [`crate::coding::raw`]).
+    /// (see `crate::coding::raw`).
     Raw {
         /// Bits per channel value, 1..=8.
         bits: u8,
     },
-    /// Coding 1, predictive (see [`crate::coding::predictive`]): its parameter byte (the
+    /// Coding 1, predictive (see `crate::coding::predictive`): its parameter byte (the
     /// quantisation step, ≥ 1) is passed through; level payload lengths are free.
     Predictive {
         /// The quantisation step, 1..=255 (1 is lossless).
@@ -103,7 +103,7 @@ impl Coding {
     /// The coding byte.
     ///
     /// ```
-    /// assert_eq!(qcs::container::Coding::Raw { bits: 4 }.id(), 0);
+    /// assert_eq!(qcs::format::Coding::Raw { bits: 4 }.id(), 0);
     /// ```
     pub fn id(&self) -> u8 {
         match self {
@@ -120,7 +120,7 @@ impl crate::coding::predictive::Params {
     ///
     /// ```
     /// use qcs::coding::predictive::Params;
-    /// use qcs::container::Coding;
+    /// use qcs::format::Coding;
     /// assert_eq!(Params::from_quality(80).coding(), Coding::Predictive { step: 5 });
     /// ```
     pub fn coding(&self) -> Coding {
@@ -131,7 +131,7 @@ impl crate::coding::predictive::Params {
 /// How `qcs info` names a coding.
 ///
 /// ```
-/// use qcs::container::Coding;
+/// use qcs::format::Coding;
 /// assert_eq!(Coding::Raw { bits: 8 }.to_string(), "raw, 8 bits per channel");
 /// assert_eq!(Coding::Predictive { step: 7 }.to_string(), "predictive, step 7");
 /// assert_eq!(Coding::Predictive { step: 1 }.to_string(), "predictive, lossless (step 1)");
@@ -151,7 +151,7 @@ impl std::fmt::Display for Coding {
 /// Without them the decoder uses the default lattice of spec/sites.md.
 ///
 /// ```
-/// use qcs::container::{Header, LatticeFields, Layout, Coding};
+/// use qcs::format::{Header, LatticeFields, Layout, Coding};
 /// let mut h = Header::new(64, 48, Layout::Rgb, 500, 8, Coding::Raw { bits: 8 });
 /// h.lattice = Some(LatticeFields { root_length: 0x1_8000, origin_x: -32 << 16, origin_y: -16 << 16 });
 /// assert_eq!(Header::parse(&h.encode()?)?.0, h); // 1.5 px root, origin (−32, −16)
@@ -173,7 +173,7 @@ pub struct LatticeFields {
 /// checks the rules of the spec.
 ///
 /// ```
-/// use qcs::container::{Header, Layout, Coding};
+/// use qcs::format::{Header, Layout, Coding};
 /// let h = Header::new(640, 480, Layout::Rgb, 10_000, 64, Coding::Raw { bits: 6 });
 /// let bytes = h.encode()?;
 /// let (parsed, len) = Header::parse(&bytes)?;
@@ -318,7 +318,7 @@ impl Header {
     /// Number of levels: ⌈log2(N/L0)⌉ + 1 (1 when L0 ≥ N). Never more than 64.
     ///
     /// ```
-    /// use qcs::container::{Header, Layout, Coding};
+    /// use qcs::format::{Header, Layout, Coding};
     /// let h = Header::new(8, 8, Layout::Grey, 100, 10, Coding::Raw { bits: 8 });
     /// assert_eq!(h.level_count(), 5); // 10, 20, 40, 80, 100
     /// ```
@@ -336,7 +336,7 @@ impl Header {
     /// The sample range `[s_k, e_k)` of level `k`, or `None` if there is no level `k`.
     ///
     /// ```
-    /// use qcs::container::{Header, Layout, Coding};
+    /// use qcs::format::{Header, Layout, Coding};
     /// let h = Header::new(8, 8, Layout::Grey, 100, 10, Coding::Raw { bits: 8 });
     /// assert_eq!(h.level_range(0), Some(0..10));
     /// assert_eq!(h.level_range(3), Some(40..80));
@@ -364,7 +364,7 @@ impl Header {
     /// ⌈count·channels·B/8⌉), `None` for the predictive coding or if there is no level `k`.
     ///
     /// ```
-    /// use qcs::container::{Header, Layout, Coding};
+    /// use qcs::format::{Header, Layout, Coding};
     /// let h = Header::new(8, 8, Layout::Rgb, 100, 10, Coding::Raw { bits: 5 });
     /// assert_eq!(h.level_payload_len(0), Some(19)); // 10 samples · 3 · 5 bits = 150 bits
     /// ```
@@ -383,7 +383,7 @@ impl Header {
     /// Checks the rules of the spec that the types do not already enforce.
     ///
     /// ```
-    /// use qcs::container::{Header, Layout, Coding};
+    /// use qcs::format::{Header, Layout, Coding};
     /// assert!(Header::new(0, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 8 }).validate().is_err());
     /// assert!(Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 9 }).validate().is_err());
     /// assert!(Header::new(1, 1, Layout::Grey, 1, 1, Coding::Predictive { step: 0 }).validate().is_err());
@@ -457,7 +457,7 @@ impl Header {
     /// a byte `d` in 1..=255 stands for `N = max(1, ⌊W·H·d / 256⌋)`.
     ///
     /// ```
-    /// use qcs::container::{Header, Layout, Coding};
+    /// use qcs::format::{Header, Layout, Coding};
     /// let h = Header::new(512, 512, Layout::Rgb, 32768, 64, Coding::Predictive { step: 17 });
     /// assert_eq!(h.density_byte(), 32); // one sample per 8 pixels
     /// assert_eq!(Header { total_samples: 32769, ..h }.density_byte(), 0);
@@ -468,12 +468,12 @@ impl Header {
             .unwrap_or(0)
     }
 
-    /// The header's bytes, its check byte ([`header_check`]) last. (Level 0's CRC covers the
+    /// The header's bytes, its check byte (`header_check`) last. (Level 0's CRC covers the
     /// header too.) At the encoder's density and first level size (one sample per 4 pixels,
     /// 127) the format byte's defaults bit stands for both fields, and they are left out.
     ///
     /// ```
-    /// use qcs::container::{Header, Layout, Coding};
+    /// use qcs::format::{Header, Layout, Coding};
     /// let bytes = Header::new(1, 1, Layout::Grey, 1, 1, Coding::Raw { bits: 8 }).encode()?;
     /// // "qc", version 2 with raw grey, 1 × 1, density byte 1 (N = 1), L0 = 1, B = 8, check.
     /// assert_eq!(bytes[..8], [b'q', b'c', 0x40, 1, 1, 1, 1, 8]);
@@ -532,7 +532,7 @@ impl Header {
 
     /// Parses a header from the start of `bytes`, returning it and its length in bytes.
     ///
-    /// `bytes` may go on past the header. Limits are not checked here (the [`super::Parser`]
+    /// `bytes` may go on past the header. Limits are not checked here (the `super::Parser`
     /// checks them); a buffer that ends inside the header is [`FormatError::TruncatedHeader`].
     pub fn parse(bytes: &[u8]) -> Result<(Header, usize), FormatError> {
         match Self::parse_prefix(bytes) {

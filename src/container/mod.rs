@@ -259,7 +259,7 @@ impl FormatError {
     /// The chunk the error is in, if it is in a chunk (not in the header).
     ///
     /// ```
-    /// use qcs::container::{ChunkRef, FormatError};
+    /// use qcs::format::{ChunkRef, FormatError};
     /// let chunk = ChunkRef { index: 2, tag: b'L', offset: 40 };
     /// let e = FormatError::UnknownCritical { chunk };
     /// assert_eq!(e.chunk(), Some(chunk));

@@ -9,10 +9,10 @@ use crate::Limits;
 use byteorder::{ByteOrder, LittleEndian};
 use std::ops::Range;
 
-/// How a [`Parser`] treats limits and damage.
+/// How a `Parser` treats limits and damage.
 ///
 /// ```
-/// use qcs::container::ParserOptions;
+/// use qcs::format::ParserOptions;
 /// let mut limits = qcs::Limits::default();
 /// limits.max_samples = 1 << 16;
 /// let opts = ParserOptions::with_limits(limits).recover(true);
@@ -24,7 +24,7 @@ pub struct ParserOptions {
     /// Limits checked on the header (image size, samples) and on metadata, before allocating.
     pub limits: Limits,
     /// On a format error after the header (CRC mismatch, bad chunk), stop with
-    /// [`Event::Stopped`] and keep the longest verified prefix instead of failing.
+    /// `Event::Stopped` and keep the longest verified prefix instead of failing.
     pub recover: bool,
     /// The caller draws on at most this many samples (`None`: all), as
     /// [`crate::DecodeOptions::max_samples`]: only the levels that start before it are decoded,

@@ -10,7 +10,7 @@ use crate::container::{
 /// Streaming decoder of raw-coded files: bytes in any chunking → the dequantised colours of every
 /// sample available so far, split into verified and not-yet-verified samples.
 ///
-/// It wraps a [`Parser`] and a [`RawUnpacker`] per level. `colours()` holds
+/// It wraps a `Parser` and a `RawUnpacker` per level. `colours()` holds
 /// `samples_available() × channels` values in sample order; the first `samples_verified()` samples
 /// are CRC-verified, the rest come from a partial level chunk. In recovery mode a damaged chunk
 /// drops the unverified samples and stops. Memory grows with the bytes given, never with header
@@ -62,7 +62,7 @@ impl RawDecoder {
         }
     }
 
-    /// Feeds bytes (any length, including 0). Errors as [`Parser::push`]; a file whose coding is
+    /// Feeds bytes (any length, including 0). Errors as `Parser::push`; a file whose coding is
     /// not raw fails with [`FormatError::UnsupportedCoding`].
     pub fn push(&mut self, bytes: &[u8]) -> Result<(), crate::Error> {
         if self.unsupported {

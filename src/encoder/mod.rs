@@ -62,7 +62,7 @@ pub struct EncodeOptions {
     pub density: f64,
     /// The levels' colour coding (default: predictive at quality 40, for the smallest
     /// previews; a file with levels only wants more, e.g.
-    /// [`DEFAULT_QUALITY`](crate::coding::predictive::DEFAULT_QUALITY)).
+    /// the predictive coder's `DEFAULT_QUALITY`).
     pub coding: Coding,
     /// What a sample's colour is.
     pub colour: SampleColour,

@@ -8,7 +8,7 @@ pub const SIN72: f64 = 0.951_056_516_295_153_5;
 /// A point `x = n0 + n1ζ + n2ζ² + n3ζ³` of Z\[ζ\] (the ten H2 roots are `±ζ^k`).
 ///
 /// ```
-/// use qcs::lattice::{ZTau, ZZeta};
+/// use qcs::format::{ZTau, ZZeta};
 /// let x = ZZeta::new([1, 2, 0, -1]);
 /// // |x|² and |x*|² are Galois conjugates in Z[τ].
 /// assert_eq!(x.norm2(), x.star().norm2().conj());

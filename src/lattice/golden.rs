@@ -12,7 +12,7 @@ pub const TAU: f64 = 1.618_033_988_749_895;
 /// below the range (see `spec/sites.md`, "Integer bounds"), and comparisons are exact.
 ///
 /// ```
-/// use qcs::lattice::ZTau;
+/// use qcs::format::ZTau;
 /// let tau = ZTau::new(0, 1);
 /// assert_eq!(tau * tau, ZTau::new(1, 1)); // τ² = 1 + τ
 /// // F51 − F50·τ ≈ 4.4e−9 is positive, though f64 evaluates it to 0.

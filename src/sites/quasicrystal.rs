@@ -1,7 +1,7 @@
 //! The normative site sequence of the format: a golden-ratio quasicrystal in the image,
 //! ordered by the exact star-map radius (spec/sites.md).
 
-use super::{Point, Sampler};
+use super::Point;
 use crate::lattice::{disk_candidates, order_key, sign_plus_sin72, ZTau, ZZeta};
 
 /// One in fixed point 16.16.
@@ -15,7 +15,7 @@ pub const DENSITY: f64 = 0.357_770_876_399_966_4;
 /// `origin + root_len · (Re x, Im x)`, all in 16.16 fixed point pixels.
 ///
 /// ```
-/// use qcs::sites::Frame;
+/// use qcs::format::Frame;
 /// let f = Frame::default_for(512, 512);
 /// assert_eq!(f.root_len, 1 << 16);          // 1 px per root
 /// assert_eq!(f.origin, [-256 << 16, -11184810]); // (−W/2, −H/3)
@@ -177,7 +177,7 @@ pub struct Site {
 /// (pixel row), then ascending `Re x` (pixel column).
 ///
 /// ```
-/// use qcs::lattice::ZZeta;
+/// use qcs::format::ZZeta;
 /// use qcs::sites::site_order;
 /// use std::cmp::Ordering;
 /// let origin = ZZeta::new([0, 0, 0, 0]);
@@ -337,15 +337,3 @@ impl Quasicrystal {
     }
 }
 
-impl Sampler for Quasicrystal {
-    fn sites(&self, width: u32, height: u32, count: usize) -> Vec<Point> {
-        match Quasicrystal::new(width, height) {
-            Ok(q) => q.first(count).into_iter().map(|s| s.pos).collect(),
-            Err(_) => Vec::new(),
-        }
-    }
-
-    fn name(&self) -> &'static str {
-        "quasicrystal"
-    }
-}
