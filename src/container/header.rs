@@ -86,12 +86,12 @@ impl Layout {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Coding {
     /// Coding 0: every channel value quantised to `bits` (1..=8) bits, packed MSB-first
-    /// (see `crate::coding::raw`).
+    /// (spec/format.md, *Codings*).
     Raw {
         /// Bits per channel value, 1..=8.
         bits: u8,
     },
-    /// Coding 1, predictive (see `crate::coding::predictive`): its parameter byte (the
+    /// Coding 1, predictive (spec/format.md, *Codings*): its parameter byte (the
     /// quantisation step, ≥ 1) is passed through; level payload lengths are free.
     Predictive {
         /// The quantisation step, 1..=255 (1 is lossless).
@@ -532,7 +532,7 @@ impl Header {
 
     /// Parses a header from the start of `bytes`, returning it and its length in bytes.
     ///
-    /// `bytes` may go on past the header. Limits are not checked here (the `super::Parser`
+    /// `bytes` may go on past the header. Limits are not checked here (the push parser
     /// checks them); a buffer that ends inside the header is [`FormatError::TruncatedHeader`].
     pub fn parse(bytes: &[u8]) -> Result<(Header, usize), FormatError> {
         match Self::parse_prefix(bytes) {
