@@ -79,9 +79,8 @@ impl std::fmt::Display for ChunkRef {
 /// A violation of the byte format, saying what and where (byte offsets are from the file start).
 ///
 /// ```
-/// use qcs::container::{FormatError, Parser};
-/// let mut p = Parser::new(Default::default());
-/// let err = p.push(b"qc\xE0", &mut Vec::new()).unwrap_err();
+/// use qcs::format::FormatError;
+/// let err = qcs::decode(b"qc\xE0", &Default::default()).unwrap_err();
 /// assert!(matches!(err, qcs::Error::Format(FormatError::UnsupportedVersion { version: 7 })));
 /// ```
 #[derive(Debug, Clone, PartialEq, Eq, ThisError)]

@@ -53,13 +53,13 @@ impl ParserOptions {
     /// before sample `k` are decoded.
     ///
     /// ```
-    /// use qcs::container::{Coding, ContainerWriter, Header, Layout, Parser, ParserOptions};
+    /// use qcs::format::{Coding, Header, Layout, ParserOptions};
     /// // 10 000 samples in levels of 100, 100, 200, 400, …; a limit of 1000.
     /// let h = Header::new(100, 100, Layout::Grey, 10_000, 100, Coding::Raw { bits: 1 });
-    /// let bytes = ContainerWriter::new(Vec::new(), &h)?.into_inner(); // the header alone
+    /// let bytes = h.encode()?; // the header alone
     /// let mut limits = qcs::Limits::default();
     /// limits.max_samples = 1000;
-    /// let push = |opts| Parser::new(opts).push(&bytes, &mut Vec::new()).map(|_| ());
+    /// let push = |opts: ParserOptions| qcs::StreamDecoder::with_options(opts).push(&bytes);
     /// assert!(push(ParserOptions::with_limits(limits.clone())).is_err());
     /// // Samples 0..800 are in the levels that start before sample 500.
     /// assert!(push(ParserOptions::with_limits(limits.clone()).max_samples(500)).is_ok());
