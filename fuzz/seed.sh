@@ -1,6 +1,6 @@
 #!/bin/sh
 # Seeds corpus/<target>/ from the conformance vectors (spec/vectors/*.qcs), with the control bytes
-# each harness expects in front (see src/fuzzing.rs). The seeds are not committed.
+# each harness expects in front (see harness/src/lib.rs). The seeds are not committed.
 set -e
 cd "$(dirname "$0")"
 for t in decode push header roundtrip; do mkdir -p corpus/$t; done

@@ -1,10 +1,10 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
-// A second, levels-only decoder that cross-checks this one: for the fuzz harness and the tests.
-#[cfg(any(feature = "internals", fuzzing, feature = "fuzzing"))]
+// A second, levels-only decoder that cross-checks this one: for the fuzz harness (fuzz/harness) and the tests.
+#[cfg(feature = "internals")]
 mod raw;
 
-#[cfg(any(feature = "internals", fuzzing, feature = "fuzzing"))]
+#[cfg(feature = "internals")]
 pub use raw::RawDecoder;
 
 use std::sync::Arc;

@@ -118,9 +118,6 @@ stages! {
 mod decoder;
 mod encoder;
 pub mod error;
-#[cfg(any(fuzzing, feature = "fuzzing"))]
-#[doc(hidden)]
-pub mod fuzzing;
 mod integration;
 pub mod limits;
 mod pull;
@@ -128,7 +125,7 @@ mod refinement;
 #[cfg(test)]
 mod testing;
 
-#[cfg(any(feature = "internals", fuzzing, feature = "fuzzing"))]
+#[cfg(feature = "internals")]
 #[doc(hidden)]
 pub use decoder::RawDecoder;
 pub use decoder::{decode, thumbnail_samples, DecodeOptions, DecodedImage, Picture, StreamDecoder};

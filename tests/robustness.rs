@@ -581,11 +581,11 @@ fn giant_claims_use_bounded_memory() {
 fn harness(target: &str) -> Option<fn(&[u8])> {
     Some(match target {
         "decode" => |d| {
-            qcs::fuzzing::decode(d);
+            qcs_fuzz_harness::decode(d);
         },
-        "push" => qcs::fuzzing::push,
-        "header" => qcs::fuzzing::header,
-        "roundtrip" => qcs::fuzzing::roundtrip,
+        "push" => qcs_fuzz_harness::push,
+        "header" => qcs_fuzz_harness::header,
+        "roundtrip" => qcs_fuzz_harness::roundtrip,
         _ => return None,
     })
 }
@@ -627,7 +627,7 @@ fn replay_fuzz_regressions() {
 #[test]
 fn vectors_through_every_harness() {
     for (_, file) in vectors() {
-        // The harnesses take control bytes first (see qcs::fuzzing): the last two also decode
+        // The harnesses take control bytes first (see qcs_fuzz_harness): the last two also decode
         // with recovery (0x40 in the second byte) and on two threads (0x20 in the third).
         for ctl in [
             &[16u8, 12, 0][..],
@@ -638,7 +638,7 @@ fn vectors_through_every_harness() {
         ] {
             let mut d = ctl.to_vec();
             d.extend_from_slice(&file);
-            let pic = qcs::fuzzing::decode(&d).expect("vector decodes");
+            let pic = qcs_fuzz_harness::decode(&d).expect("vector decodes");
             assert!(pic.is_final || ctl[2] & 0x80 != 0);
         }
         for seed in [
@@ -651,15 +651,15 @@ fn vectors_through_every_harness() {
         ] {
             let mut d = seed.to_vec();
             d.extend_from_slice(&file);
-            qcs::fuzzing::push(&d);
+            qcs_fuzz_harness::push(&d);
             // Damaged: the push and pull decoders must agree on it.
             for at in [file.len() / 3, file.len() - 3] {
                 d[4 + at] ^= 0x24;
-                qcs::fuzzing::push(&d);
+                qcs_fuzz_harness::push(&d);
                 d[4 + at] ^= 0x24;
             }
         }
-        qcs::fuzzing::header(&file);
+        qcs_fuzz_harness::header(&file);
     }
     for ctl in [
         [0u8; 8],
@@ -674,7 +674,7 @@ fn vectors_through_every_harness() {
     ] {
         let mut d = ctl.to_vec();
         d.extend_from_slice(b"some pixels \x00\xff\x80");
-        qcs::fuzzing::roundtrip(&d);
-        qcs::fuzzing::roundtrip(&ctl); // constant (zero) pixels
+        qcs_fuzz_harness::roundtrip(&d);
+        qcs_fuzz_harness::roundtrip(&ctl); // constant (zero) pixels
     }
 }

@@ -1,6 +1,6 @@
-//! cargo-fuzz target `push`: see `qcs::fuzzing::push` for the input layout and the invariants.
+//! cargo-fuzz target `push`: see `qcs_fuzz_harness::push` for the input layout and the invariants.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    qcs::fuzzing::push(data);
+    qcs_fuzz_harness::push(data);
 });

@@ -1,6 +1,6 @@
-//! cargo-fuzz target `roundtrip`: see `qcs::fuzzing::roundtrip` for the input layout and the invariants.
+//! cargo-fuzz target `roundtrip`: see `qcs_fuzz_harness::roundtrip` for the input layout and the invariants.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    qcs::fuzzing::roundtrip(data);
+    qcs_fuzz_harness::roundtrip(data);
 });

@@ -39,7 +39,7 @@ mod refinement;
 pub mod varint;
 mod writer;
 
-pub(crate) use header::DEFAULT_FIRST_LEVEL;
+pub use header::DEFAULT_FIRST_LEVEL;
 pub use header::{
     header_check, Coding, Header, LatticeFields, Layout, LEVELS_ONLY_VERSION, MAGIC,
     MAX_HEADER_LEN, VERSION,

@@ -1,5 +1,5 @@
 //! A levels-only decoder of raw-coded files over the container's push [`Parser`]: the fuzz
-//! harnesses (`src/fuzzing.rs`) cross-check [`crate::StreamDecoder`] against it, and
+//! harnesses (`fuzz/harness/`) cross-check [`crate::StreamDecoder`] against it, and
 //! `tests/container.rs` uses it to read raw levels back.
 
 use crate::coding::raw::RawUnpacker;

@@ -1,5 +1,5 @@
-//! Fuzz harness bodies, shared by the cargo-fuzz targets in `fuzz/` and by the replay test
-//! (`tests/robustness.rs`), so that a crash input found by the fuzzer is checked by plain
+//! The fuzz targets' bodies, shared by the cargo-fuzz targets in `fuzz/` and by the replay
+//! test (`tests/robustness.rs`), so that a crash input found by the fuzzer is checked by plain
 //! `cargo test` through exactly the same code.
 //!
 //! Every function takes arbitrary bytes. It returns normally when the library behaved (an
@@ -7,14 +7,15 @@
 //! invariant of the library is broken: that panic is what the fuzzer reports. Limits are tight
 //! ([`limits`]) so that one input costs milliseconds.
 //!
-//! Not a stable API: hidden from the docs, may change with the fuzz targets.
+//! It reaches into the codec's stages (the `internals` feature of `qcs`) to cross-check the
+//! decoders against each other. Not a stable API: it changes with the fuzz targets.
 
-use crate::coding::raw;
-use crate::container::{self, Coding, Header, Layout, Parser, ParserOptions};
-use crate::sampling::{SampleColour, SourceImage};
-use crate::sites::{Frame, Quasicrystal};
-use crate::{Cadence, DecodeOptions, EncodeOptions, Error, Limits, Method, Previews, Target};
-use crate::{Picture, RawDecoder, StreamDecoder};
+use qcs::coding::raw;
+use qcs::container::{self, Coding, Header, Layout, Parser, ParserOptions};
+use qcs::sampling::{SampleColour, SourceImage};
+use qcs::sites::{Frame, Quasicrystal};
+use qcs::{Cadence, DecodeOptions, EncodeOptions, Error, Limits, Method, Previews, Target};
+use qcs::{Picture, RawDecoder, StreamDecoder};
 
 /// The limits every harness decodes with: small images, few samples, little metadata.
 ///
@@ -24,18 +25,24 @@ use crate::{Picture, RawDecoder, StreamDecoder};
 /// loops longer. Under `cfg(fuzzing)` `spade` also checks its bulk-load hull after every
 /// vertex, which is quadratic (a 6318-sample file took 9 s in the decode target and 10 ms in
 /// a normal build).
-///
-/// ```
-/// assert!(qcs::fuzzing::limits().max_samples <= 1 << 12);
-/// ```
 pub fn limits() -> Limits {
-    Limits {
-        max_dimension: 4096,
-        max_image_pixels: 1 << 16,
-        max_output_pixels: 64 * 64,
-        max_samples: 1 << 10,
-        max_metadata_bytes: 1 << 12,
-    }
+    let mut limits = Limits::default();
+    limits.max_dimension = 4096;
+    limits.max_image_pixels = 1 << 16;
+    limits.max_output_pixels = 64 * 64;
+    limits.max_samples = 1 << 10;
+    limits.max_metadata_bytes = 1 << 12;
+    limits
+}
+
+/// The samples of the levels that start before sample `k`: at most what a decoder capped at
+/// `k` samples holds (all of them when `k` is in the last level).
+fn samples_of_levels_before(h: &Header, k: u64) -> u64 {
+    (0..h.level_count())
+        .map_while(|l| h.level_range(l))
+        .take_while(|r| r.start < k)
+        .last()
+        .map_or(0, |r| r.end)
 }
 
 /// Runs `f` on one thread (`threads == 1`: this one, as the only worker of its own pool, so
@@ -100,7 +107,7 @@ fn byte(ctl: &[u8], i: usize) -> u8 {
 }
 
 /// Checks a decoded picture against what the header and the request imply.
-fn check_decoded(d: &crate::DecodedImage, header: &Header, w: u32, h: u32) {
+fn check_decoded(d: &qcs::DecodedImage, header: &Header, w: u32, h: u32) {
     assert_eq!((d.image.width(), d.image.height()), (w, h), "output size");
     let channels = d.image.color().channel_count();
     assert_eq!(channels, header.layout.channels(), "output layout");
@@ -125,15 +132,11 @@ fn check_decoded(d: &crate::DecodedImage, header: &Header, w: u32, h: u32) {
 /// never fails where the strict decoder succeeds and agrees with it then; the header seen by
 /// the decoder is the one [`Header::parse`] reads; the counts match [`RawDecoder`]'s; a
 /// two-thread pool gives the same result as one thread (flag 0x20).
-///
-/// ```
-/// qcs::fuzzing::decode(b"\x10\x10\x00qcs\x01\x00\x02\x02\x01\x03\x02\x00\x01\x08");
-/// ```
-pub fn decode(data: &[u8]) -> Option<crate::DecodedImage> {
+pub fn decode(data: &[u8]) -> Option<qcs::DecodedImage> {
     on_threads(1, || decode_on_one_thread(data))
 }
 
-fn decode_on_one_thread(data: &[u8]) -> Option<crate::DecodedImage> {
+fn decode_on_one_thread(data: &[u8]) -> Option<qcs::DecodedImage> {
     let (ctl, file) = split(data, 3);
     let w = 1 + (byte(ctl, 0) % 64) as u32;
     let h = 1 + (byte(ctl, 1) % 64) as u32;
@@ -150,16 +153,16 @@ fn decode_on_one_thread(data: &[u8]) -> Option<crate::DecodedImage> {
         limits: limits(),
         recover,
     };
-    let strict = crate::decode(file, &opts(false));
+    let strict = qcs::decode(file, &opts(false));
     // Recovery where the strict decode fails, and on a good decode when flag 0x40 of the
     // second control byte asks (a second decode doubles an input's cost).
     let recovered =
-        (strict.is_err() || byte(ctl, 1) & 0x40 != 0).then(|| crate::decode(file, &opts(true)));
+        (strict.is_err() || byte(ctl, 1) & 0x40 != 0).then(|| qcs::decode(file, &opts(true)));
     // On more than one thread, Gouraud builds the cells beside the colour decoding; on one it
     // does not. Same answer either way (flag 0x20: a thread handoff costs more than a small
     // decode, so only some inputs pay for this check).
     if flags & 0x20 != 0 {
-        match (&strict, on_threads(2, || crate::decode(file, &opts(false)))) {
+        match (&strict, on_threads(2, || qcs::decode(file, &opts(false)))) {
             (Ok(a), Ok(b)) => {
                 assert_eq!(
                     a.samples_used, b.samples_used,
@@ -212,7 +215,7 @@ fn decode_on_one_thread(data: &[u8]) -> Option<crate::DecodedImage> {
     if let Ok(d) = &strict {
         let (header, _) = Header::parse(file).expect("a decoded file has a parsable header");
         check_decoded(d, &header, w, h);
-        if !matches!(header.coding, crate::container::Coding::Raw { .. }) {
+        if !matches!(header.coding, qcs::container::Coding::Raw { .. }) {
             return strict.ok();
         }
         assert!(
@@ -239,13 +242,9 @@ fn decode_on_one_thread(data: &[u8]) -> Option<crate::DecodedImage> {
 ///
 /// Checks: a push error is final (the decoder stays poisoned); the counts never go down (but
 /// for a recovery dropping a damaged chunk's unverified samples) and
-/// match a one-shot [`crate::decode`] of the same bytes at the end; renders have the size asked
+/// match a one-shot [`qcs::decode`] of the same bytes at the end; renders have the size asked
 /// for; the same file split differently gives the same result as one push. Then reads the
 /// file with the pull decoder, [`Previews`] (see `pull` in the source).
-///
-/// ```
-/// qcs::fuzzing::push(b"seed");
-/// ```
 pub fn push(data: &[u8]) {
     on_threads(1, || push_on_one_thread(data))
 }
@@ -305,7 +304,7 @@ fn push_on_one_thread(data: &[u8]) {
         );
         assert!(dec.samples_verified() <= dec.samples_available());
         if let (Some(k), Some(h)) = (cap, dec.header()) {
-            assert!(dec.samples_available() <= h.samples_of_levels_before(k));
+            assert!(dec.samples_available() <= samples_of_levels_before(h, k));
         }
         last_avail = dec.samples_available();
         last_verified = dec.samples_verified();
@@ -448,10 +447,6 @@ fn pull(file: &[u8], rng: &mut Rng, strict_failed: Option<bool>) {
 /// The header parser on arbitrary bytes: a parsed header re-encodes to the same header, its
 /// level schedule is consistent, and the push [`Parser`] fed one byte at
 /// a time agrees with [`Header::parse`]. Also runs [`container::inspect`].
-///
-/// ```
-/// qcs::fuzzing::header(b"qc\x40\x02\x02\xc0\x02\x08\x15");
-/// ```
 pub fn header(data: &[u8]) {
     let parsed = Header::parse(data);
     if let Ok((h, len)) = &parsed {
@@ -529,10 +524,6 @@ fn h_too_big(parsed: &Result<(Header, usize), container::FormatError>) -> bool {
 /// (byte `n`, a constant image decodes to within 2 of its constant from quality 50 on: 1 for
 /// the levels' rounding, 1 for the lossy 9/7's), or a
 /// size (the file is no larger than asked, when that leaves room for the levels).
-///
-/// ```
-/// qcs::fuzzing::roundtrip(b"\x07\x05\x02\x04\x30\x03\x00\x00pixels");
-/// ```
 pub fn roundtrip(data: &[u8]) {
     on_threads(1, || roundtrip_on_one_thread(data))
 }
@@ -592,13 +583,13 @@ fn roundtrip_on_one_thread(data: &[u8]) {
         frame,
         ..Default::default()
     };
-    let file = crate::encode(&image, &opts).expect("encoding a small image");
+    let file = qcs::encode(&image, &opts).expect("encoding a small image");
     let levels_only = EncodeOptions {
         target: Target::LevelsOnly,
         ..opts.clone()
     };
     if let Target::Size(size) = target {
-        let base = crate::encode(&image, &levels_only).expect("encoding a small image");
+        let base = qcs::encode(&image, &levels_only).expect("encoding a small image");
         if size as usize >= base.len() + 64 {
             assert!(
                 file.len() as u64 <= size,
@@ -629,7 +620,7 @@ fn roundtrip_on_one_thread(data: &[u8]) {
 
     let constant = pixels.chunks(c).all(|p| p == &pixels[..c]);
     if target != Target::LevelsOnly {
-        let d = crate::decode(
+        let d = qcs::decode(
             &file,
             &DecodeOptions {
                 limits: limits(),
@@ -662,7 +653,7 @@ fn roundtrip_on_one_thread(data: &[u8]) {
     // Levels only: one method per input (the colour rule's byte chooses it too).
     if target == Target::LevelsOnly {
         let method = METHODS[(byte(ctl, 6) / 5 % 4) as usize];
-        let d = crate::decode(
+        let d = qcs::decode(
             &file,
             &DecodeOptions {
                 method,
@@ -688,7 +679,7 @@ fn roundtrip_on_one_thread(data: &[u8]) {
     // A prefix cut after the header is a picture; inside the header it is NeedMoreData.
     let (_, header_len) = Header::parse(&file).expect("own header");
     let cut = header_len + (byte(ctl, 4) as usize * 7 + px.len()) % (file.len() - header_len + 1);
-    let d = crate::decode(
+    let d = qcs::decode(
         &file[..cut],
         &DecodeOptions {
             size: Some((8, 8)),
@@ -700,7 +691,7 @@ fn roundtrip_on_one_thread(data: &[u8]) {
     assert!(d.samples_used <= n);
     assert_eq!(d.is_final, cut == file.len());
     assert!(matches!(
-        crate::decode(&file[..header_len - 1], &Default::default()),
+        qcs::decode(&file[..header_len - 1], &Default::default()),
         Err(Error::NeedMoreData)
     ));
 }
