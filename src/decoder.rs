@@ -127,11 +127,14 @@ pub struct StreamDecoder {
 impl StreamDecoder {
     /// A decoder enforcing `limits`; a format error after the header fails the push.
     pub fn new(limits: Limits) -> Self {
-        Self::with_options(ParserOptions::with_limits(limits))
+        Self::with_options(ParserOptions {
+            limits,
+            ..Default::default()
+        })
     }
 
-    /// A decoder with parser options: `recover(true)` keeps the longest verified prefix of a
-    /// damaged file instead of failing (see [`StreamDecoder::stopped`]); `max_samples(k)`
+    /// A decoder with parser options: `recover` keeps the longest verified prefix of a
+    /// damaged file instead of failing (see [`StreamDecoder::stopped`]); `max_samples: Some(k)`
     /// decodes only the levels that start before sample `k` (the later ones are parsed and
     /// verified, not decoded), for a stream shown at a size that needs no more, e.g.
     /// [`thumbnail_samples`] for [`StreamDecoder::render_thumbnail`]. The sample limit then
@@ -144,7 +147,7 @@ impl StreamDecoder {
     /// // A file of levels only: one sample per 4 pixels.
     /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
     /// let bytes = qcs::encode(&img, &levels)?;
-    /// let opts = ParserOptions::default().max_samples(qcs::thumbnail_samples(6, 6));
+    /// let opts = ParserOptions { max_samples: Some(qcs::thumbnail_samples(6, 6)), ..Default::default() };
     /// let mut dec = StreamDecoder::with_options(opts);
     /// dec.push(&bytes)?;
     /// assert!(dec.is_complete() && dec.samples_available() < 96 * 96 / 4);
@@ -565,8 +568,21 @@ impl StreamDecoder {
     /// # Ok::<(), qcs::Error>(())
     /// ```
     pub fn render_thumbnail(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
+        self.render_thumbnail_first(u64::MAX, method, width, height)
+    }
+
+    /// [`StreamDecoder::render_thumbnail`] from at most the first `k` samples (with `k` at
+    /// least the file's sample count, a file with a refinement gives the refinement's
+    /// thumbnail), as [`StreamDecoder::render_first`] is [`StreamDecoder::render`].
+    pub(crate) fn render_thumbnail_first(
+        &mut self,
+        k: u64,
+        method: Method,
+        width: u32,
+        height: u32,
+    ) -> Result<Picture> {
         self.check_output_size(width, height)?;
-        if let Some(h) = self.header.clone() {
+        if let Some(h) = self.header.clone().filter(|h| k >= h.total_samples) {
             if let Some(d) = self.render_refined(&h, width, height, true, false) {
                 return Ok(if d.is_final {
                     Picture::Final(d)
@@ -575,7 +591,10 @@ impl StreamDecoder {
                 });
             }
         }
-        let k = self.sample_count().min(thumbnail_samples(width, height));
+        let k = self
+            .sample_count()
+            .min(thumbnail_samples(width, height))
+            .min(k);
         let f = thumbnail_factor(k, width, height, &self.limits);
         let pic = self.render_first(k, method, width * f, height * f)?;
         Ok(match pic {
@@ -866,11 +885,11 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<DecodedImage> {
     if let (true, Some((w, h))) = (opts.thumbnail, opts.size) {
         max_samples = max_samples.min(thumbnail_samples(w, h));
     }
-    let mut dec = StreamDecoder::with_options(
-        ParserOptions::with_limits(opts.limits.clone())
-            .recover(opts.recover)
-            .max_samples(max_samples),
-    );
+    let mut dec = StreamDecoder::with_options(ParserOptions {
+        limits: opts.limits.clone(),
+        recover: opts.recover,
+        max_samples: Some(max_samples),
+    });
     if let (true, Some((w, h))) = (opts.thumbnail, opts.size) {
         dec = dec.with_thumbnail_size(w, h);
     }

@@ -92,7 +92,10 @@ impl ImageDecoder for QcsImageDecoder {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     fn icc_profile(&mut self) -> ImageResult<Option<Vec<u8>>> {
-        let mut parser = Parser::new(ParserOptions::with_limits(self.limits.clone()));
+        let mut parser = Parser::new(ParserOptions {
+            limits: self.limits.clone(),
+            ..Default::default()
+        });
         let mut events = Vec::new();
         let parsed = parser.push(&self.bytes, &mut events);
         let icc = events.into_iter().find_map(|e| match e {

@@ -12,16 +12,15 @@ use thiserror::Error as ThisError;
 /// [`Limits::max_samples`] samples, and a level's sites are laid out when its chunk begins.
 ///
 /// The defaults are meant for untrusted input (see [`Limits::max_samples`] for the memory they
-/// allow); [`Limits::none`] lifts them to the format's own bounds.
+/// allow); [`Limits::none`] lifts them to the format's own bounds. As every options type of the
+/// crate, a struct of public fields: set those you need and take the rest from a default.
 ///
 /// ```
-/// let mut limits = qcs::Limits::default();
-/// limits.max_samples = 1 << 20;
+/// let limits = qcs::Limits { max_samples: 1 << 20, ..Default::default() };
 /// assert!(limits.check_samples(1000).is_ok());
 /// assert!(limits.check_samples(1 << 21).is_err());
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
-#[non_exhaustive]
 pub struct Limits {
     /// Largest image width or height accepted from a header.
     pub max_dimension: u32,

@@ -1,9 +1,9 @@
 //! A pull decoder over `std::io::Read`: previews as the bytes of a file or socket arrive.
 
 use crate::container::ParserOptions;
-use crate::decoder::{thumbnail_samples, Picture, StreamDecoder};
+use crate::decoder::{thumbnail_samples, DecodeOptions, Picture, StreamDecoder};
 use crate::reconstruction::Method;
-use crate::{Error, Limits, Result};
+use crate::{Error, Result};
 use std::io::Read;
 
 /// When [`Previews`] yields a picture.
@@ -22,13 +22,13 @@ pub enum Cadence {
 /// picture: damage there ends the iteration with an error, as [`crate::decode`] reports it. A
 /// stream that ends before its header is complete yields [`crate::Error::NeedMoreData`]. An
 /// error is always the last item. For a `size` much smaller than the image,
-/// [`Previews::thumbnails`] draws better pictures for less work.
+/// [`DecodeOptions::thumbnail`] draws better pictures for less work.
 ///
 /// ```
-/// use qcs::{Cadence, Method, Previews};
+/// use qcs::{Cadence, Previews};
 /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(96, 64, |x, y| image::Rgb([x as u8 * 2, y as u8 * 3, (x * y) as u8])));
 /// let bytes = qcs::encode(&img, &qcs::EncodeOptions::default())?;
-/// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, Method::Gouraud, None, qcs::Limits::default())
+/// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, &Default::default())
 ///     .collect::<Result<_, _>>()?;
 /// // A picture for the level of samples and one per layer of the refinement.
 /// assert!(pics.len() > 3);
@@ -42,9 +42,12 @@ pub struct Previews<R> {
     cadence: Cadence,
     method: Method,
     size: Option<(u32, u32)>,
-    limits: Limits,
-    /// Pictures are thumbnails ([`Previews::thumbnails`]).
+    /// Pictures are thumbnails ([`DecodeOptions::thumbnail`]).
     thumbnail: bool,
+    /// Pictures draw on at most this many samples ([`DecodeOptions::max_samples`]).
+    max_samples: u64,
+    /// Bytes still to read ([`DecodeOptions::max_bytes`]).
+    left: usize,
     levels_seen: u32,
     buf: Vec<u8>,
     pos: usize,
@@ -57,28 +60,61 @@ pub struct Previews<R> {
 }
 
 impl<R: Read> Previews<R> {
-    /// Reads `reader` and yields a picture at each `cadence` step, rendered with `method` at
-    /// `size` (default: the image's own size).
-    pub fn new(
-        reader: R,
-        cadence: Cadence,
-        method: Method,
-        size: Option<(u32, u32)>,
-        limits: Limits,
-    ) -> Self {
+    /// Reads `reader` and yields a picture at each `cadence` step, drawn as [`crate::decode`]
+    /// draws one with `opts` from the bytes read so far: with its method, at its size (default:
+    /// the image's own), from at most its `max_samples`, reading at most its `max_bytes`, and
+    /// with its limits and recovery. Only the levels those pictures draw on are decoded (the
+    /// rest are read and checked).
+    ///
+    /// As thumbnails (`opts.thumbnail`), each picture draws on at most the first 16 samples per
+    /// output pixel, each pixel the mean of a square rendered at its subpixel centres, and
+    /// the last picture is the first one drawn on all of them: it is [`Picture::Final`] only if
+    /// that is every sample of the file. (At the image's own size a thumbnail is the plain
+    /// picture.)
+    ///
+    /// ```
+    /// use qcs::{Cadence, DecodeOptions, Previews};
+    /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x ^ y) as u8])));
+    /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
+    /// let bytes = qcs::encode(&img, &levels)?; // 2304 samples
+    /// let opts = DecodeOptions { size: Some((6, 6)), thumbnail: true, ..Default::default() };
+    /// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, &opts)
+    ///     .collect::<Result<_, _>>()?;
+    /// let last = pics.last().unwrap().decoded();
+    /// assert_eq!((last.image.width(), last.samples_used), (6, 16 * 6 * 6));
+    /// // The last picture is the one-shot decode's.
+    /// assert_eq!(last.image, qcs::decode(&bytes, &opts)?.image);
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn new(reader: R, cadence: Cadence, opts: &DecodeOptions) -> Self {
         // A read size only: pictures follow the bytes pushed, not the reads.
         let chunk = match cadence {
             Cadence::EveryBytes(k) => k.clamp(1 << 12, 1 << 20),
             Cadence::PerLevel => 1 << 12,
         };
+        let max_samples = opts.max_samples.unwrap_or(u64::MAX);
+        // As `decode`: decode only the levels the pictures draw on.
+        let thumbnail_size = opts.size.filter(|_| opts.thumbnail);
+        let decoded = thumbnail_size.map_or(max_samples, |(w, h)| {
+            max_samples.min(thumbnail_samples(w, h))
+        });
+        let mut decoder = StreamDecoder::with_options(ParserOptions {
+            limits: opts.limits.clone(),
+            recover: opts.recover,
+            max_samples: (decoded < u64::MAX).then_some(decoded),
+        });
+        if let Some((w, h)) = thumbnail_size {
+            decoder = decoder.with_thumbnail_size(w, h);
+        }
         Previews {
             reader,
-            decoder: StreamDecoder::new(limits.clone()),
+            decoder,
             cadence,
-            method,
-            size,
-            limits,
-            thumbnail: false,
+            method: opts.method,
+            size: opts.size,
+            thumbnail: opts.thumbnail,
+            max_samples,
+            left: opts.max_bytes.unwrap_or(usize::MAX),
             levels_seen: 0,
             buf: vec![0; chunk],
             pos: 0,
@@ -87,38 +123,6 @@ impl<R: Read> Previews<R> {
             last_sent: false,
             finished: false,
         }
-    }
-
-    /// Draws every picture as a thumbnail of `size` ([`StreamDecoder::render_thumbnail`],
-    /// as [`crate::DecodeOptions::thumbnail`]): from at most the first 16 samples per output
-    /// pixel, each pixel the mean of a square rendered at its subpixel centres. Only the levels
-    /// those samples need are decoded (the rest are read and checked), and the last picture
-    /// is the first one drawn on all of them: it is [`Picture::Final`] only if that is every
-    /// sample of the file. (At the image's own size a thumbnail is the plain picture.) Call
-    /// it before the first picture; later, it still draws thumbnails but decodes every level.
-    ///
-    /// ```
-    /// use qcs::{Cadence, Method, Previews};
-    /// let img = image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(96, 96, |x, y| image::Luma([(x ^ y) as u8])));
-    /// let levels = qcs::EncodeOptions { target: qcs::Target::LevelsOnly, ..Default::default() };
-    /// let bytes = qcs::encode(&img, &levels)?; // 2304 samples
-    /// let pics: Vec<_> = Previews::new(&bytes[..], Cadence::PerLevel, Method::Gouraud, Some((6, 6)), qcs::Limits::default())
-    ///     .thumbnails()
-    ///     .collect::<Result<_, _>>()?;
-    /// let last = pics.last().unwrap().decoded();
-    /// assert_eq!((last.image.width(), last.samples_used), (6, 16 * 6 * 6));
-    /// # Ok::<(), qcs::Error>(())
-    /// ```
-    pub fn thumbnails(mut self) -> Self {
-        self.thumbnail = true;
-        if self.len == 0 && !self.finished {
-            // Nothing read yet: decode only what the thumbnails draw on.
-            let (w, h) = self.size.unwrap_or((u32::MAX, u32::MAX));
-            let opts = ParserOptions::with_limits(self.limits.clone());
-            self.decoder = StreamDecoder::with_options(opts.max_samples(thumbnail_samples(w, h)))
-                .with_thumbnail_size(w, h);
-        }
-        self
     }
 
     /// The decoder, e.g. for its header and sample counts.
@@ -136,9 +140,10 @@ impl<R: Read> Previews<R> {
     /// picture would repeat) ends the iteration.
     fn picture(&mut self) -> Option<Result<Picture>> {
         let (w, h) = self.size()?;
+        let k = self.max_samples;
         let r = match self.thumbnail {
-            true => self.decoder.render_thumbnail(self.method, w, h),
-            false => self.decoder.render(self.method, w, h),
+            true => self.decoder.render_thumbnail_first(k, self.method, w, h),
+            false => self.decoder.render_first(k, self.method, w, h),
         };
         if r.is_err() {
             (self.finished, self.pos) = (true, self.len);
@@ -154,10 +159,13 @@ impl<R: Read> Previews<R> {
     /// Whether every sample the pictures draw on has arrived and is verified: no later byte
     /// can change the picture.
     fn done(&self) -> bool {
+        let verified = self.decoder.samples_verified();
         match (self.thumbnail, self.size(), self.decoder.header()) {
             (true, Some((w, h)), Some(head)) if !head.refinement => {
-                let uses = head.total_samples.min(thumbnail_samples(w, h));
-                self.decoder.samples_verified() >= uses
+                verified >= (head.total_samples.min(thumbnail_samples(w, h))).min(self.max_samples)
+            }
+            (_, _, Some(head)) if self.max_samples < head.total_samples => {
+                verified >= self.max_samples
             }
             _ => self.decoder.is_complete(),
         }
@@ -173,7 +181,8 @@ impl<R: Read> Iterator for Previews<R> {
                 if self.finished {
                     return None;
                 }
-                match self.reader.read(&mut self.buf) {
+                let room = self.buf.len().min(self.left);
+                match self.reader.read(&mut self.buf[..room]) {
                     Ok(0) => {
                         self.finished = true;
                         if self.last_sent {
@@ -181,7 +190,10 @@ impl<R: Read> Iterator for Previews<R> {
                         }
                         return Some(self.picture().unwrap_or(Err(Error::NeedMoreData)));
                     }
-                    Ok(n) => (self.pos, self.len) = (0, n),
+                    Ok(n) => {
+                        (self.pos, self.len) = (0, n);
+                        self.left -= n;
+                    }
                     Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
                     Err(e) => {
                         self.finished = true;

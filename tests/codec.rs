@@ -259,8 +259,10 @@ fn capped_decodes_need_only_their_levels_within_the_limits() {
     let levels = qcs::container::inspect(&bytes).levels;
     let n = levels.last().unwrap().samples.end;
     let limit = levels[levels.len() - 2].samples.end; // all but the last level
-    let mut limits = qcs::Limits::default();
-    limits.max_samples = limit;
+    let limits = qcs::Limits {
+        max_samples: limit,
+        ..Default::default()
+    };
     let whole = DecodeOptions {
         limits: limits.clone(),
         ..Default::default()

@@ -111,6 +111,13 @@ fn test_file() -> (Vec<u8>, Vec<(u8, usize, usize)>) {
     (file, chunks)
 }
 
+fn with_limits(limits: Limits) -> ParserOptions {
+    ParserOptions {
+        limits,
+        ..Default::default()
+    }
+}
+
 fn parse_all(bytes: &[u8], opts: ParserOptions) -> (Parser, Vec<Event>, Result<(), Error>) {
     let mut p = Parser::new(opts);
     let mut ev = Vec::new();
@@ -282,7 +289,7 @@ proptest! {
                 prop_assert_eq!(Header::parse(&with_tail).unwrap(), (h.clone(), bytes.len()));
                 // Every strict prefix is "need more data" to the push parser, never an error.
                 for cut in 0..bytes.len() {
-                    let (p, ev, r) = parse_all(&bytes[..cut], Limits::none().into());
+                    let (p, ev, r) = parse_all(&bytes[..cut], with_limits(Limits::none()));
                     prop_assert!(r.is_ok());
                     prop_assert!(ev.is_empty());
                     prop_assert_eq!(p.end_state(), EndState::InHeader);
@@ -452,7 +459,7 @@ fn huge_claims_rejected_by_default_limits() {
     varint::write_u64(&mut hand, 1 << 40);
     hand.extend_from_slice(&[1, 8]);
     let hand = with_check(hand);
-    let e = format_err(parse_all(&hand, Limits::none().into()).2);
+    let e = format_err(parse_all(&hand, with_limits(Limits::none())).2);
     assert!(matches!(
         e,
         FormatError::InvalidField {
@@ -471,7 +478,7 @@ fn huge_claims_rejected_by_default_limits() {
         1,
         Coding::Predictive { step: 1 },
     );
-    let (p, ev, r) = parse_all(&h.encode().unwrap(), Limits::none().into());
+    let (p, ev, r) = parse_all(&h.encode().unwrap(), with_limits(Limits::none()));
     assert!(r.is_ok());
     assert_eq!(ev, vec![Event::Header(h)]);
     assert!(matches!(p.end_state(), EndState::InChunk(c) if c.index == 0));
@@ -740,7 +747,10 @@ fn recovery_keeps_longest_verified_prefix() {
     }));
 
     // With recovery: a Stopped event, verified samples only, the rest ignored.
-    let mut p = Parser::new(ParserOptions::default().recover(true));
+    let mut p = Parser::new(ParserOptions {
+        recover: true,
+        ..Default::default()
+    });
     let mut ev = Vec::new();
     p.push(&bad[..off + len], &mut ev).unwrap();
     p.push(&bad[off + len..], &mut ev).unwrap();
@@ -862,9 +872,11 @@ fn chunk_order_rules() {
 #[test]
 fn metadata_limit() {
     let (file, _) = test_file();
-    let mut limits = Limits::default();
-    limits.max_metadata_bytes = 10; // the text chunk has 11 bytes
-    let (_, ev, r) = parse_all(&file, limits.into());
+    let limits = Limits {
+        max_metadata_bytes: 10, // the text chunk has 11 bytes
+        ..Default::default()
+    };
+    let (_, ev, r) = parse_all(&file, with_limits(limits));
     assert!(
         matches!(
             r,
@@ -878,9 +890,11 @@ fn metadata_limit() {
     assert!(ev
         .iter()
         .any(|e| matches!(e, Event::LevelVerified { level: 0, .. })));
-    let mut limits = Limits::default();
-    limits.max_metadata_bytes = 21; // 11 + 10
-    assert!(parse_all(&file, limits.into()).2.is_ok());
+    let limits = Limits {
+        max_metadata_bytes: 21, // 11 + 10
+        ..Default::default()
+    };
+    assert!(parse_all(&file, with_limits(limits)).2.is_ok());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1135,7 +1149,10 @@ fn recovery_after_any_bit_flip_keeps_only_true_samples() {
         for bit in 0..8 {
             let mut bad = file.clone();
             bad[byte] ^= 1 << bit;
-            let mut d = RawDecoder::new(ParserOptions::default().recover(true));
+            let mut d = RawDecoder::new(ParserOptions {
+                recover: true,
+                ..Default::default()
+            });
             let r = d.push(&bad);
             let what = format!("byte {byte} bit {bit}");
             match r {
@@ -1209,7 +1226,10 @@ proptest! {
             }
         }
         for recover in [false, true] {
-            let opts = ParserOptions::default().recover(recover);
+            let opts = ParserOptions {
+                recover,
+                ..Default::default()
+            };
             let (p1, ev1, r1) = parse_all(&file, opts.clone());
             let cut = split.index(file.len() + 1);
             let mut p2 = Parser::new(opts);

@@ -296,7 +296,10 @@ fn payload_flip_names_chunk_and_offset() {
     assert_eq!(d.samples_verified, h.level_range(0).unwrap().end);
     assert_eq!(d.samples_used, d.samples_verified);
     assert_eq!(d.levels_complete, 1);
-    let mut s = StreamDecoder::with_options(ParserOptions::default().recover(true));
+    let mut s = StreamDecoder::with_options(ParserOptions {
+        recover: true,
+        ..Default::default()
+    });
     s.push(&bad).expect("recovering push");
     assert!(
         matches!(s.stopped(), Some(FormatError::ChunkCrc { chunk, .. }) if chunk == &level1.chunk)
@@ -496,7 +499,10 @@ fn giant_claims_cost_what_the_bytes_cost() {
         Err(Error::Limits(_))
     ));
     // The parser alone: the header event, then level 0, nothing sized by N.
-    let mut p = Parser::new(ParserOptions::with_limits(Limits::none()));
+    let mut p = Parser::new(ParserOptions {
+        limits: Limits::none(),
+        ..Default::default()
+    });
     let mut ev = Vec::new();
     p.push(&file, &mut ev).expect("parse");
     assert_eq!(p.progress().samples_verified, 8);

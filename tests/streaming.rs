@@ -48,7 +48,7 @@ impl std::io::Read for Trickle<'_> {
 }
 
 fn previews<R: std::io::Read>(r: R, cadence: Cadence) -> Vec<Result<qcs::Picture, Error>> {
-    Previews::new(r, cadence, Method::Gouraud, None, Limits::default()).collect()
+    Previews::new(r, cadence, &DecodeOptions::default()).collect()
 }
 
 /// In recovery mode a damaged last level is dropped: a render after that shows the verified
@@ -64,7 +64,10 @@ fn recovery_drops_damaged_samples_from_later_renders() {
         Method::Natural,
         Method::Cubic,
     ] {
-        let opts = ParserOptions::with_limits(Limits::default()).recover(true);
+        let opts = ParserOptions {
+            recover: true,
+            ..Default::default()
+        };
         let mut d = StreamDecoder::with_options(opts);
         d.push(&bad[..n - 30]).expect("push");
         let early = d.render(method, 48, 32).expect("render");
@@ -143,13 +146,7 @@ fn the_stream_is_read_to_its_end() {
     w.write_level(&[100]).expect("level");
     w.write_text("Author", "me").expect("text");
     let with_text = w.finish().expect("file");
-    let mut p = Previews::new(
-        &with_text[..],
-        Cadence::PerLevel,
-        Method::Gouraud,
-        None,
-        Limits::default(),
-    );
+    let mut p = Previews::new(&with_text[..], Cadence::PerLevel, &DecodeOptions::default());
     assert!(p.by_ref().all(|r| r.is_ok()));
     let mut d = StreamDecoder::new(Limits::default());
     d.push(&with_text).expect("push");
@@ -282,13 +279,21 @@ fn a_decoder_capped_at_a_thumbnails_samples_draws_the_same_thumbnails() {
     let (w, h) = (2, 2);
     let cap = qcs::thumbnail_samples(w, h);
     assert!(cap < n / 4);
-    let mut limits = Limits::default();
-    limits.max_samples = cap; // the levels before `cap` end at it: 8, 16, 32, 64
-    let opts = ParserOptions::with_limits(limits.clone());
+    let limits = Limits {
+        max_samples: cap, // the levels before `cap` end at it: 8, 16, 32, 64
+        ..Default::default()
+    };
+    let opts = ParserOptions {
+        limits: limits.clone(),
+        ..Default::default()
+    };
     assert!(StreamDecoder::with_options(opts.clone())
         .push(&bytes)
         .is_err());
-    let mut capped = StreamDecoder::with_options(opts.max_samples(cap));
+    let mut capped = StreamDecoder::with_options(ParserOptions {
+        max_samples: Some(cap),
+        ..opts
+    });
     let mut whole = StreamDecoder::new(Limits::default());
     for piece in bytes.chunks(7) {
         capped.push(piece).expect("push");
@@ -385,18 +390,12 @@ fn previews_draw_thumbnails() {
 
 /// A picture per level, Gouraud, at `size`, thumbnails or not.
 fn per_level<R: std::io::Read>(r: R, size: Option<(u32, u32)>, thumbnails: bool) -> Previews<R> {
-    let p = Previews::new(
-        r,
-        Cadence::PerLevel,
-        Method::Gouraud,
+    let opts = DecodeOptions {
         size,
-        Limits::default(),
-    );
-    if thumbnails {
-        p.thumbnails()
-    } else {
-        p
-    }
+        thumbnail: thumbnails,
+        ..Default::default()
+    };
+    Previews::new(r, Cadence::PerLevel, &opts)
 }
 
 /// A picture that cannot be drawn (here: larger than the limits allow) ends the iteration:
@@ -404,18 +403,18 @@ fn per_level<R: std::io::Read>(r: R, size: Option<(u32, u32)>, thumbnails: bool)
 #[test]
 fn previews_end_at_a_render_error() {
     let bytes = file();
-    let mut limits = Limits::default();
-    limits.max_output_pixels = 100;
+    let limits = Limits {
+        max_output_pixels: 100,
+        ..Default::default()
+    };
     for thumbnails in [false, true] {
         for cadence in [Cadence::PerLevel, Cadence::EveryBytes(16)] {
-            let p = Previews::new(
-                Trickle(&bytes),
-                cadence,
-                Method::Gouraud,
-                None,
-                limits.clone(),
-            );
-            let p = if thumbnails { p.thumbnails() } else { p };
+            let opts = DecodeOptions {
+                thumbnail: thumbnails,
+                limits: limits.clone(),
+                ..Default::default()
+            };
+            let p = Previews::new(Trickle(&bytes), cadence, &opts);
             let items: Vec<_> = p.collect();
             assert!(
                 matches!(items[..], [Err(Error::Limits(_))]),
@@ -449,5 +448,57 @@ fn a_failed_decoder_is_poisoned() {
             e.to_string(),
             "StreamDecoder used again after it returned an error"
         );
+    }
+}
+
+/// `Previews` draws what `decode` draws with the same options: its last picture is the
+/// one-shot decode's, whatever the options (a sample cap, a byte cut, thumbnails, the method),
+/// for a file of levels only and for one with a refinement.
+#[test]
+fn previews_draw_what_decode_draws_with_the_same_options() {
+    let refined = encode(&gradient(), &EncodeOptions::default()).expect("encode");
+    for bytes in [file(), refined] {
+        let n = bytes.len();
+        let all = [
+            DecodeOptions::default(),
+            DecodeOptions {
+                max_bytes: Some(n / 2),
+                ..Default::default()
+            },
+            DecodeOptions {
+                max_samples: Some(40),
+                size: Some((20, 12)),
+                method: Method::Shepard,
+                ..Default::default()
+            },
+            DecodeOptions {
+                size: Some((6, 4)),
+                thumbnail: true,
+                ..Default::default()
+            },
+            DecodeOptions {
+                size: Some((6, 4)),
+                thumbnail: true,
+                max_samples: Some(20),
+                max_bytes: Some(n - 3),
+                ..Default::default()
+            },
+        ];
+        for opts in all {
+            for cadence in [Cadence::PerLevel, Cadence::EveryBytes(16)] {
+                let pics: Vec<_> = Previews::new(Trickle(&bytes), cadence, &opts)
+                    .collect::<Result<_, _>>()
+                    .expect("pictures");
+                let last = pics.last().expect("a picture").decoded();
+                let once = decode(&bytes, &opts).expect("decode");
+                assert!(
+                    last.image == once.image && last.samples_used == once.samples_used,
+                    "{opts:?}, {cadence:?}: {} against {} samples",
+                    last.samples_used,
+                    once.samples_used
+                );
+                assert_eq!(last.is_final, once.is_final, "{opts:?}");
+            }
+        }
     }
 }

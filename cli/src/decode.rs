@@ -97,10 +97,10 @@ pub(super) fn stream_decoder(
     recover: bool,
     ctx: &Ctx,
 ) -> StreamDecoder {
-    let opts = qcs::container::ParserOptions::with_limits(ctx.limits.clone()).recover(recover);
-    StreamDecoder::with_options(match thumbnail {
-        true => opts.max_samples(qcs::thumbnail_samples(size.0, size.1)),
-        false => opts,
+    StreamDecoder::with_options(qcs::format::ParserOptions {
+        limits: ctx.limits.clone(),
+        recover,
+        max_samples: thumbnail.then(|| qcs::thumbnail_samples(size.0, size.1)),
     })
 }
 

@@ -194,9 +194,11 @@ pub fn read_qcs(
     ctx: &Ctx,
     mut on_header: impl FnMut(&Header) -> Result<()>,
 ) -> Result<QcsInput> {
-    let opts = ParserOptions::with_limits(ctx.limits.clone())
-        .recover(how.recover)
-        .max_samples(0);
+    let opts = ParserOptions {
+        limits: ctx.limits.clone(),
+        recover: how.recover,
+        max_samples: Some(0),
+    };
     let mut gate = StreamDecoder::with_options(opts);
     let mut bytes = Vec::new();
     let mut refused = None;

@@ -94,8 +94,11 @@ fn qcs_samples(a: &RenderArgs, input: QcsInput, ctx: &Ctx) -> Result<Option<Samp
         return Ok(None);
     };
     let k = a.samples.map_or(u64::MAX, |n| n as u64);
-    let opts = qcs::container::ParserOptions::with_limits(ctx.limits.clone()).max_samples(k);
-    let mut d = StreamDecoder::with_options(opts);
+    let mut d = StreamDecoder::with_options(qcs::format::ParserOptions {
+        limits: ctx.limits.clone(),
+        recover: false,
+        max_samples: Some(k),
+    });
     d.push(&input.bytes)
         .with_context(|| format!("cannot decode {}", a.input.display()))?;
     let c = h.layout.channels() as usize;

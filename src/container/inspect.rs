@@ -102,7 +102,11 @@ pub struct Inspection {
 /// # Ok::<(), qcs::Error>(())
 /// ```
 pub fn inspect(bytes: &[u8]) -> Inspection {
-    let mut parser = Parser::new(ParserOptions::with_limits(Limits::none()).recover(true));
+    let mut parser = Parser::new(ParserOptions {
+        limits: Limits::none(),
+        recover: true,
+        max_samples: None,
+    });
     let mut events = Vec::new();
     let result = parser.push(bytes, &mut events);
     let header = parser.header().cloned();

@@ -9,17 +9,25 @@ use crate::Limits;
 use byteorder::{ByteOrder, LittleEndian};
 use std::ops::Range;
 
-/// How a `Parser` treats limits and damage.
+/// How a `Parser` treats limits and damage. Like every options type of the crate, a struct of
+/// public fields with a [`Default`] (the default limits, no recovery, every level decoded):
+/// set the fields you need and take the rest from the default.
 ///
 /// ```
-/// use qcs::format::ParserOptions;
-/// let mut limits = qcs::Limits::default();
-/// limits.max_samples = 1 << 16;
-/// let opts = ParserOptions::with_limits(limits).recover(true);
-/// assert!(opts.recover);
+/// use qcs::format::{Coding, Header, Layout, ParserOptions};
+/// // 10 000 samples in levels of 100, 100, 200, 400, …; a sample limit of 1000.
+/// let h = Header::new(100, 100, Layout::Grey, 10_000, 100, Coding::Raw { bits: 1 });
+/// let bytes = h.encode()?; // the header alone
+/// let limits = qcs::Limits { max_samples: 1000, ..Default::default() };
+/// let push = |opts: ParserOptions| qcs::StreamDecoder::with_options(opts).push(&bytes);
+/// assert!(push(ParserOptions { limits: limits.clone(), ..Default::default() }).is_err());
+/// // Samples 0..800 are in the levels that start before sample 500.
+/// let capped = |k| ParserOptions { limits: limits.clone(), max_samples: Some(k), ..Default::default() };
+/// assert!(push(capped(500)).is_ok());
+/// assert!(push(capped(801)).is_err());
+/// # Ok::<(), qcs::Error>(())
 /// ```
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
-#[non_exhaustive]
 pub struct ParserOptions {
     /// Limits checked on the header (image size, samples) and on metadata, before allocating.
     pub limits: Limits,
@@ -27,55 +35,10 @@ pub struct ParserOptions {
     /// `Event::Stopped` and keep the longest verified prefix instead of failing.
     pub recover: bool,
     /// The caller draws on at most this many samples (`None`: all), as
-    /// [`crate::DecodeOptions::max_samples`]: only the levels that start before it are decoded,
-    /// and the sample limit is checked against the samples of those levels, not the header's
-    /// count.
+    /// [`crate::DecodeOptions::max_samples`]: only the levels that start before it are decoded
+    /// (the later ones are parsed and verified), and the sample limit is checked against the
+    /// samples of those levels, not the header's count.
     pub max_samples: Option<u64>,
-}
-
-impl ParserOptions {
-    /// Options with the given limits, no recovery, every level decoded.
-    pub fn with_limits(limits: Limits) -> Self {
-        ParserOptions {
-            limits,
-            recover: false,
-            max_samples: None,
-        }
-    }
-
-    /// These options with recovery switched on or off.
-    pub fn recover(mut self, recover: bool) -> Self {
-        self.recover = recover;
-        self
-    }
-
-    /// These options for a caller that draws on at most `k` samples: the levels starting
-    /// before sample `k` are decoded.
-    ///
-    /// ```
-    /// use qcs::format::{Coding, Header, Layout, ParserOptions};
-    /// // 10 000 samples in levels of 100, 100, 200, 400, …; a limit of 1000.
-    /// let h = Header::new(100, 100, Layout::Grey, 10_000, 100, Coding::Raw { bits: 1 });
-    /// let bytes = h.encode()?; // the header alone
-    /// let mut limits = qcs::Limits::default();
-    /// limits.max_samples = 1000;
-    /// let push = |opts: ParserOptions| qcs::StreamDecoder::with_options(opts).push(&bytes);
-    /// assert!(push(ParserOptions::with_limits(limits.clone())).is_err());
-    /// // Samples 0..800 are in the levels that start before sample 500.
-    /// assert!(push(ParserOptions::with_limits(limits.clone()).max_samples(500)).is_ok());
-    /// assert!(push(ParserOptions::with_limits(limits).max_samples(801)).is_err());
-    /// # Ok::<(), qcs::Error>(())
-    /// ```
-    pub fn max_samples(mut self, k: u64) -> Self {
-        self.max_samples = Some(k);
-        self
-    }
-}
-
-impl From<Limits> for ParserOptions {
-    fn from(limits: Limits) -> Self {
-        ParserOptions::with_limits(limits)
-    }
 }
 
 /// A metadata chunk's content.

@@ -26,13 +26,13 @@ use qcs::{Picture, RawDecoder, StreamDecoder};
 /// vertex, which is quadratic (a 6318-sample file took 9 s in the decode target and 10 ms in
 /// a normal build).
 pub fn limits() -> Limits {
-    let mut limits = Limits::default();
-    limits.max_dimension = 4096;
-    limits.max_image_pixels = 1 << 16;
-    limits.max_output_pixels = 64 * 64;
-    limits.max_samples = 1 << 10;
-    limits.max_metadata_bytes = 1 << 12;
-    limits
+    Limits {
+        max_dimension: 4096,
+        max_image_pixels: 1 << 16,
+        max_output_pixels: 64 * 64,
+        max_samples: 1 << 10,
+        max_metadata_bytes: 1 << 12,
+    }
 }
 
 /// The samples of the levels that start before sample `k`: at most what a decoder capped at
@@ -192,7 +192,11 @@ fn decode_on_one_thread(data: &[u8]) -> Option<qcs::DecodedImage> {
             .min(16 * w as u64 * h as u64),
         false => max_samples.unwrap_or(u64::MAX),
     };
-    let mut raw = RawDecoder::new(ParserOptions::with_limits(limits()).max_samples(cap));
+    let mut raw = RawDecoder::new(ParserOptions {
+        limits: limits(),
+        recover: false,
+        max_samples: Some(cap),
+    });
     let raw_result = raw.push(file);
 
     match (&strict, &recovered) {
@@ -253,12 +257,16 @@ fn push_on_one_thread(data: &[u8]) {
     let (ctl, file) = split(data, 4);
     let mut rng = Rng::new(ctl);
     let recover = rng.below(4) == 0;
-    let mut opts = ParserOptions::with_limits(limits()).recover(recover);
+    let mut opts = ParserOptions {
+        limits: limits(),
+        recover,
+        max_samples: None,
+    };
     // Sometimes decoding only the levels that start before a sample (below 256), as for
     // thumbnails: the levels after it are verified, not decoded.
     let cap = (rng.below(4) == 0).then(|| rng.below(256));
     if let Some(k) = cap {
-        opts = opts.max_samples(k);
+        opts.max_samples = Some(k);
     }
     let mut dec = StreamDecoder::with_options(opts.clone());
     let mut pos = 0;
@@ -401,8 +409,14 @@ fn pull(file: &[u8], rng: &mut Rng, strict_failed: Option<bool>) {
     let method = METHODS[rng.below(3) as usize];
     let thumbnails = rng.below(2) == 0;
     let reader = Pieces(file, Rng(rng.next() | 1));
-    let p = Previews::new(reader, cadence, method, size, limits());
-    let p = if thumbnails { p.thumbnails() } else { p };
+    let opts = DecodeOptions {
+        method,
+        size,
+        thumbnail: thumbnails,
+        limits: limits(),
+        ..Default::default()
+    };
+    let p = Previews::new(reader, cadence, &opts);
     // Per level: at most a picture per level (each takes at least 5 bytes); every K bytes:
     // one per K; plus the last, or an error.
     let bound = match cadence {
@@ -485,7 +499,10 @@ pub fn header(data: &[u8]) {
         assert!(h.level_range(levels).is_none());
     }
     // The push parser, byte by byte, with no limits, sees the same header.
-    let mut p = Parser::new(ParserOptions::with_limits(Limits::none()));
+    let mut p = Parser::new(ParserOptions {
+        limits: Limits::none(),
+        ..Default::default()
+    });
     let mut events = Vec::new();
     let mut result = Ok(());
     for b in data.iter().take(container::MAX_HEADER_LEN + 1) {
@@ -613,7 +630,10 @@ fn roundtrip_on_one_thread(data: &[u8]) {
         .iter()
         .map(|&v| raw::dequantise(raw::quantise(v, bits), bits))
         .collect();
-    let mut rd = RawDecoder::new(ParserOptions::with_limits(limits()));
+    let mut rd = RawDecoder::new(ParserOptions {
+        limits: limits(),
+        ..Default::default()
+    });
     rd.push(&file).expect("decoding what was encoded");
     assert_eq!(rd.samples_verified(), n);
     assert_eq!(rd.colours(), &expected[..], "sample colours");
