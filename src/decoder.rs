@@ -53,6 +53,15 @@ pub enum Picture {
 }
 
 impl Picture {
+    /// `d` as the final picture if it draws on the whole file, else as a preview.
+    fn of(d: DecodedImage) -> Picture {
+        if d.is_final {
+            Picture::Final(d)
+        } else {
+            Picture::Preview(d)
+        }
+    }
+
     /// Whether this is the final picture.
     pub fn is_final(&self) -> bool {
         matches!(self, Picture::Final(_))
@@ -511,11 +520,7 @@ impl StreamDecoder {
         self.check_output_size(width, height)?;
         if k >= h.total_samples {
             if let Some(d) = self.render_refined(&h, width, height, false, false) {
-                return Ok(if d.is_final {
-                    Picture::Final(d)
-                } else {
-                    Picture::Preview(d)
-                });
+                return Ok(Picture::of(d));
             }
         }
         let n = self.sample_count().min(k);
@@ -542,11 +547,7 @@ impl StreamDecoder {
             refined: false,
             icc: self.icc_profile().map(<[u8]>::to_vec),
         };
-        Ok(if decoded.is_final {
-            Picture::Final(decoded)
-        } else {
-            Picture::Preview(decoded)
-        })
+        Ok(Picture::of(decoded))
     }
 
     /// A thumbnail of what has arrived (see [`DecodeOptions::thumbnail`]): from the
@@ -584,11 +585,7 @@ impl StreamDecoder {
         self.check_output_size(width, height)?;
         if let Some(h) = self.header.clone().filter(|h| k >= h.total_samples) {
             if let Some(d) = self.render_refined(&h, width, height, true, false) {
-                return Ok(if d.is_final {
-                    Picture::Final(d)
-                } else {
-                    Picture::Preview(d)
-                });
+                return Ok(Picture::of(d));
             }
         }
         let k = self
