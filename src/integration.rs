@@ -8,7 +8,7 @@ use image::{ColorType, ImageDecoder, ImageError, ImageResult};
 use std::io::Read;
 
 /// Largest `.qcs` file [`QcsImageDecoder`] reads into memory (1 GiB).
-pub const MAX_FILE_BYTES: u64 = 1 << 30;
+pub(crate) const MAX_FILE_BYTES: u64 = 1 << 30;
 
 /// `image`'s error for `e`. `image` prints a decoding error as "Format error decoding qcs: "
 /// and the error it wraps: a format error is wrapped itself, since [`Error::Format`] would

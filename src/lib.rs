@@ -91,6 +91,10 @@
 //! benches and the measuring tools, with no stability promise.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// What is `pub` is reachable: with the stages public (`internals`), every `pub` item must be
+// (the rest is `pub(crate)` or narrower). Without the feature the stages are private and their
+// `pub` items unreachable by design, so the lint applies to the build that exposes them.
+#![cfg_attr(feature = "internals", deny(unreachable_pub))]
 
 /// The codec's stages: public modules with the `internals` feature, private without it (where
 /// what only the lab and the tools use is not dead code to warn about).

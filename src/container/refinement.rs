@@ -44,11 +44,11 @@ pub struct RefinementHeader {
 }
 
 /// The most bit-planes a channel may have.
-pub const MAX_BITPLANES: u8 = 30;
+pub(crate) const MAX_BITPLANES: u8 = 30;
 /// The most transform levels.
-pub const MAX_LEVELS: u8 = 15;
+pub(crate) const MAX_LEVELS: u8 = 15;
 /// The most fraction bits.
-pub const MAX_FRACTION_BITS: u8 = 3;
+pub(crate) const MAX_FRACTION_BITS: u8 = 3;
 
 /// Why a refinement header or segment table could not be read.
 #[derive(Clone, Debug, PartialEq, Eq)]
