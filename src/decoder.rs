@@ -660,6 +660,11 @@ impl StreamDecoder {
         if bytes > isize::MAX as u64 {
             return Err(Error::OutOfMemory { bytes });
         }
+        if let Some(h) = &self.header {
+            let decoded = h.samples_of_levels_before(self.max_samples);
+            self.limits
+                .check_alloc(decoded, h.coefficients_decoded(decoded), bytes)?;
+        }
         Ok(())
     }
 

@@ -45,7 +45,26 @@ pub struct Limits {
     pub max_samples: u64,
     /// Largest total size of metadata (ICC, text) kept by a decoder.
     pub max_metadata_bytes: u64,
+    /// The most memory, in bytes, a decode may hold at once by the decoder's account, which
+    /// it checks before allocating: when the header arrives (for the levels it will decode and
+    /// the refinement) and before each picture (adding the picture). The account is an upper
+    /// bound of what the decoder allocates, not counting the file's own bytes: 512 bytes per
+    /// sample of the levels decoded, 8 per coefficient of a refinement decoded (width × height
+    /// × channels), and twice the picture drawn (measured peaks are below it: 380–410 bytes per
+    /// sample, 4.0 per coefficient at the default quality and 5.4 for a lossless file, 1.0–1.6
+    /// times the picture; MEASUREMENTS.md). A thumbnail holds much less than the account of its
+    /// refinement. The default 4 GiB refuses nothing within the other defaults' samples but
+    /// refinements beyond about 170 megapixels of RGB.
+    pub max_alloc: u64,
 }
+
+/// The decoder's account of its memory ([`Limits::max_alloc`]): for each sample of the levels
+/// it decodes…
+const SAMPLE_BYTES: u64 = 512;
+/// … for each coefficient of the refinement it decodes…
+const COEFFICIENT_BYTES: u64 = 8;
+/// … and for each byte of the picture it draws.
+const PICTURE_BYTES: u64 = 2;
 
 impl Default for Limits {
     fn default() -> Self {
@@ -55,6 +74,7 @@ impl Default for Limits {
             max_output_pixels: 1 << 28,
             max_samples: 1 << 22,
             max_metadata_bytes: 1 << 24,
+            max_alloc: 1 << 32,
         }
     }
 }
@@ -95,6 +115,14 @@ pub enum LimitError {
         /// `max_samples`.
         limit: u64,
     },
+    /// The decoder's account of a decode's memory above `max_alloc`.
+    #[error("a decode of {value} bytes exceeds the limit {limit}")]
+    Alloc {
+        /// The decoder's account, in bytes (saturated at `u64::MAX`).
+        value: u64,
+        /// `max_alloc`.
+        limit: u64,
+    },
     /// Metadata above `max_metadata_bytes`.
     #[error("{value} metadata bytes exceed the limit {limit}")]
     Metadata {
@@ -114,6 +142,7 @@ impl Limits {
             max_output_pixels: u64::MAX,
             max_samples: u64::MAX,
             max_metadata_bytes: u64::MAX,
+            max_alloc: u64::MAX,
         }
     }
 
@@ -154,6 +183,28 @@ impl Limits {
             return Err(LimitError::Samples {
                 value: n,
                 limit: self.max_samples,
+            });
+        }
+        Ok(())
+    }
+
+    /// Checks the decoder's account of a decode ([`Limits::max_alloc`]) against `max_alloc`:
+    /// `samples` of the levels decoded, `coefficients` of the refinement decoded (0 if none)
+    /// and `picture` bytes drawn.
+    pub(crate) fn check_alloc(
+        &self,
+        samples: u64,
+        coefficients: u64,
+        picture: u64,
+    ) -> Result<(), LimitError> {
+        let value = samples
+            .saturating_mul(SAMPLE_BYTES)
+            .saturating_add(coefficients.saturating_mul(COEFFICIENT_BYTES))
+            .saturating_add(picture.saturating_mul(PICTURE_BYTES));
+        if value > self.max_alloc {
+            return Err(LimitError::Alloc {
+                value,
+                limit: self.max_alloc,
             });
         }
         Ok(())

@@ -537,16 +537,13 @@ fn memory_child() {
     println!("PEAK_RSS_KIB {before} {}", peak_rss_kib().unwrap_or(0));
 }
 
-#[test]
-fn giant_claims_use_bounded_memory() {
-    if peak_rss_kib().is_none() {
-        eprintln!("no /proc/self/status: skipped");
-        return;
-    }
-    // Its name in this binary: `memory_child`, or `MODULE::memory_child` in tests/suite.rs.
+/// Runs test `name` of this binary in a child process with `env` set, and returns the
+/// `PEAK_RSS_KIB before after` it prints.
+fn child_peak_kib(name: &str, env: (&str, &str)) -> (u64, u64) {
+    // Its name in this binary: `name`, or `MODULE::name` in tests/suite.rs.
     let name = match module_path!().split_once("::") {
-        Some((_, module)) => format!("{module}::memory_child"),
-        None => "memory_child".to_string(),
+        Some((_, module)) => format!("{module}::{name}"),
+        None => name.to_string(),
     };
     let out = std::process::Command::new(std::env::current_exe().expect("test binary"))
         .args([
@@ -556,7 +553,7 @@ fn giant_claims_use_bounded_memory() {
             "--nocapture",
             "--test-threads=1",
         ])
-        .env(CHILD, "1")
+        .env(env.0, env.1)
         .output()
         .expect("run child");
     let text = String::from_utf8_lossy(&out.stdout);
@@ -569,16 +566,108 @@ fn giant_claims_use_bounded_memory() {
         .split_whitespace()
         .map(|x| x.parse().expect("KiB"))
         .collect();
-    let grown = v[1].saturating_sub(v[0]);
-    eprintln!(
-        "peak RSS {} KiB before, {} KiB after (+{grown} KiB)",
-        v[0], v[1]
-    );
+    (v[0], v[1])
+}
+
+#[test]
+fn giant_claims_use_bounded_memory() {
+    if peak_rss_kib().is_none() {
+        eprintln!("no /proc/self/status: skipped");
+        return;
+    }
+    let (before, after) = child_peak_kib("memory_child", (CHILD, "1"));
+    let grown = after.saturating_sub(before);
+    eprintln!("peak RSS {before} KiB before, {after} KiB after (+{grown} KiB)");
     // A claim-sized allocation would be ≥ 2^32 samples: gigabytes. Allow 64 MiB.
     assert!(
         grown < 64 * 1024,
         "decoding a giant claim grew the peak RSS by {grown} KiB"
     );
+}
+
+/// The decoder's memory account (`Limits::max_alloc`) of a whole decode of `file` at its own
+/// size, as the limit's documentation states it.
+fn account(file: &[u8]) -> u64 {
+    let (h, _) = Header::parse(file).expect("header");
+    let c = h.layout.channels() as u64;
+    let pixels = h.width as u64 * h.height as u64;
+    let coefficients = if h.refinement { pixels * c } else { 0 };
+    h.total_samples * 512 + coefficients * 8 + pixels * c * 2
+}
+
+/// Three photograph-like files of 640 × 480: the default encode, lossless, levels only.
+fn account_files() -> Vec<Vec<u8>> {
+    let img = image::DynamicImage::ImageRgb8(image::RgbImage::from_fn(640, 480, |x, y| {
+        let v = (x * 7 + y * 13) ^ (x * y / 5);
+        image::Rgb([v as u8, (v >> 3) as u8 ^ x as u8, (x + y) as u8])
+    }));
+    [
+        qcs::EncodeOptions::default(),
+        qcs::EncodeOptions {
+            target: qcs::Target::Lossless,
+            ..Default::default()
+        },
+        qcs::EncodeOptions {
+            target: qcs::Target::LevelsOnly,
+            ..Default::default()
+        },
+    ]
+    .iter()
+    .map(|o| qcs::encode(&img, o).expect("encode"))
+    .collect()
+}
+
+const ACCOUNT_CHILD: &str = "QCS_ROBUSTNESS_ACCOUNT_CHILD";
+
+/// Run in a child process: decodes file `i` of [`account_files`] (made before measuring).
+#[test]
+#[ignore = "run by decodes_stay_within_their_memory_account in a child process"]
+fn account_child() {
+    let Some(i) = std::env::var(ACCOUNT_CHILD).ok() else {
+        return;
+    };
+    let file = account_files().swap_remove(i.parse().expect("index"));
+    // The encoder's peak is past: measure the decode alone from a fresh high-water mark.
+    std::fs::write("/proc/self/clear_refs", "5").expect("reset the peak");
+    let fresh = peak_rss_kib().unwrap_or(0);
+    let d = qcs::decode(&file, &DecodeOptions::default()).expect("decode");
+    assert!(d.is_final);
+    println!("PEAK_RSS_KIB {fresh} {}", peak_rss_kib().unwrap_or(0));
+}
+
+/// A whole decode holds less than the decoder's account of it, and a limit below the account
+/// refuses the file before allocating.
+#[test]
+fn decodes_stay_within_their_memory_account() {
+    let files = account_files();
+    for (i, file) in files.iter().enumerate() {
+        let account = account(file);
+        let within = |max_alloc| DecodeOptions {
+            limits: Limits {
+                max_alloc,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        assert!(qcs::decode(file, &within(account)).is_ok(), "file {i}");
+        assert!(
+            matches!(
+                qcs::decode(file, &within(account - 1)),
+                Err(Error::Limits(qcs::limits::LimitError::Alloc { value, .. })) if value == account
+            ),
+            "file {i}"
+        );
+        if peak_rss_kib().is_none() || std::fs::metadata("/proc/self/clear_refs").is_err() {
+            continue;
+        }
+        let (fresh, after) = child_peak_kib("account_child", (ACCOUNT_CHILD, &i.to_string()));
+        let grown = after.saturating_sub(fresh) * 1024;
+        eprintln!("file {i}: decode grew the peak RSS by {grown} bytes; account {account}");
+        assert!(
+            grown <= account,
+            "file {i}: {grown} bytes > account {account}"
+        );
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -279,6 +279,16 @@ fn encode_file(
         })?;
     let bytes =
         qcs::encode(&img, &opts).with_context(|| format!("cannot encode {}", input.display()))?;
+    // The decoder's memory account is checked at the header: a file whose decode would
+    // exceed --max-memory is not written.
+    qcs::StreamDecoder::new(limits.clone())
+        .push(&bytes[..bytes.len().min(64)])
+        .with_context(|| {
+            format!(
+                "cannot encode {}: `qcs decode` would refuse the file; raise --max-memory",
+                input.display()
+            )
+        })?;
     let psnr = match psnr {
         false => None,
         true => {

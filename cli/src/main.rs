@@ -64,6 +64,10 @@ pub struct Global {
     /// `none` lifts it. Lower it for untrusted input on a small machine.
     #[arg(long, global = true, value_name = "N", value_parser = parse_limit)]
     pub max_samples: Option<u64>,
+    /// The most memory a decode may take by the decoder's account (see `qcs::Limits::max_alloc`):
+    /// default 4G (K, M, G: binary multiples); `none` lifts it.
+    #[arg(long, global = true, value_name = "BYTES", value_parser = parse_bytes)]
+    pub max_memory: Option<u64>,
     /// The most input bytes read and held: default 64M (K, M, G: binary multiples); `none`
     /// lifts it. A longer input is refused (exit 4) with no more than that read.
     #[arg(long, global = true, value_name = "BYTES", value_parser = parse_bytes)]
@@ -79,8 +83,8 @@ pub const DEFAULT_MAX_INPUT: u64 = 64 << 20;
 pub struct Ctx {
     /// `--quiet`.
     pub quiet: bool,
-    /// The decoder's (and the encoder's checks') limits, with `--max-pixels` and
-    /// `--max-samples` applied.
+    /// The decoder's (and the encoder's checks') limits, with `--max-pixels`, `--max-samples`
+    /// and `--max-memory` applied.
     pub limits: qcs::Limits,
     /// `--max-input`.
     pub max_input: u64,
@@ -98,6 +102,9 @@ impl Global {
         }
         if let Some(n) = self.max_samples {
             limits.max_samples = n;
+        }
+        if let Some(n) = self.max_memory {
+            limits.max_alloc = n;
         }
         Ctx {
             quiet: self.quiet,

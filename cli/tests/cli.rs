@@ -1397,3 +1397,36 @@ fn eval_png_plots_have_their_text() {
     // Tick labels left of the y axis.
     assert!(dark(30..68, 40..500) > 200, "no y ticks");
 }
+
+/// `--max-memory`: a decode whose memory account is above it is refused (exit 4) before it
+/// draws anything, and `encode` does not write a file that `decode` would refuse.
+#[test]
+fn a_memory_limit_refuses_decodes_and_encodes_beyond_it() {
+    let file = rocket_qcs("memory.qcs");
+    let png = scratch("memory.png");
+    // 480 × 320 × 3 coefficients at 8 bytes: 3.5 MiB, more than 1 MiB.
+    let (c, err) = code(
+        qcs()
+            .args(["--max-memory", "1M", "decode"])
+            .arg(&file)
+            .arg(&png),
+    );
+    assert_eq!(c, Some(4), "{err}");
+    assert!(err.contains("exceeds the limit 1048576"), "{err}");
+    assert!(!png.exists());
+    let out = run(qcs()
+        .args(["-q", "--max-memory", "8M", "decode"])
+        .arg(&file)
+        .arg(&png));
+    assert!(out.status.success(), "{out:?}");
+    let refused = scratch("memory-refused.qcs");
+    let (c, err) = code(
+        qcs()
+            .args(["--max-memory", "1M", "encode"])
+            .arg(ROCKET)
+            .arg(&refused),
+    );
+    assert_eq!(c, Some(4), "{err}");
+    assert!(err.contains("raise --max-memory"), "{err}");
+    assert!(!refused.exists());
+}

@@ -315,6 +315,17 @@ impl Header {
             .map_or(0, |r| r.end)
     }
 
+    /// The refinement's coefficients (width × height × channels) a decoder that decodes
+    /// `decoded` samples of the levels goes on to decode: all of them if the file has a
+    /// refinement and every level is decoded, else none.
+    pub(crate) fn coefficients_decoded(&self, decoded: u64) -> u64 {
+        if self.refinement && decoded >= self.total_samples {
+            (self.width as u64 * self.height as u64) * self.layout.channels() as u64
+        } else {
+            0
+        }
+    }
+
     /// Number of levels: ⌈log2(N/L0)⌉ + 1 (1 when L0 ≥ N). Never more than 64.
     ///
     /// ```

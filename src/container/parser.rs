@@ -612,6 +612,9 @@ impl Parser {
                     None => header.total_samples,
                 };
                 limits.check_samples(decoded).map_err(Fail::Limits)?;
+                limits
+                    .check_alloc(decoded, header.coefficients_decoded(decoded), 0)
+                    .map_err(Fail::Limits)?;
                 self.level_count = header.level_count();
                 self.header = Some(header.clone());
                 self.header_offsets = offsets;

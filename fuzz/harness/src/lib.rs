@@ -32,6 +32,8 @@ pub fn limits() -> Limits {
         max_output_pixels: 64 * 64,
         max_samples: 1 << 10,
         max_metadata_bytes: 1 << 12,
+        // Never reached within the others (at most about 3 MB).
+        max_alloc: 1 << 24,
     }
 }
 
