@@ -73,8 +73,22 @@
 //!
 //! ## Hostile input, errors, and the `image` crate
 //!
-//! [`Limits`] bound what a file may cost (pixels, samples, output size, metadata) before
-//! anything it sizes is allocated; a damaged file gives an [`Error::Format`] naming the chunk
+//! [`Limits`] bound what a file may cost (pixels, samples, output size, metadata, and the
+//! decoder's account of a decode's memory) before anything it sizes is allocated:
+//!
+//! ```
+//! # let img = image::open("tests/data/coffee-150x100.png")?;
+//! # let file = qcs::encode(&img, &Default::default())?;
+//! let tight = qcs::DecodeOptions {
+//!     limits: qcs::Limits { max_alloc: 64 << 10, ..Default::default() },
+//!     ..Default::default()
+//! };
+//! // 150 × 100 × 3 coefficients of a refinement are more than 64 KiB by the account.
+//! assert!(matches!(qcs::decode(&file, &tight), Err(qcs::Error::Limits(_))));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! A damaged file gives an [`Error::Format`] naming the chunk
 //! and byte offset, or, with [`DecodeOptions::recover`], the longest verified prefix.
 //! [`Error`]'s variants say who is to blame. [`register_image_hooks`] makes `image::open`
 //! read `.qcs` files, and [`QcsImageDecoder`] is an [`image::ImageDecoder`].
