@@ -36,7 +36,8 @@ const CODING_SHIFT: u8 = 2;
 /// The density byte and first level size that the format byte's defaults bit stands for in a
 /// version-2 file: one sample per 4 pixels, 127 samples in level 0.
 pub(crate) const DEFAULT_DENSITY_BYTE: u8 = 64;
-/// See [`DEFAULT_DENSITY_BYTE`].
+/// The first level size that the format byte's defaults bit stands for in a version-2 file:
+/// 127 samples in level 0 (the density byte's default is one sample per 4 pixels).
 pub const DEFAULT_FIRST_LEVEL: u64 = 127;
 /// What the defaults bit stands for in a version-3 file: one level of `min(64, W·H)` samples.
 pub(crate) const REFINED_DEFAULT_SAMPLES: u64 = 64;
