@@ -1,6 +1,7 @@
 //! `.qcs` bytes → pictures: a push decoder for streams, and one-shot decoding.
 
-// A second, levels-only decoder that cross-checks this one: for the fuzz harness (fuzz/harness) and the tests.
+// A second, levels-only decoder that cross-checks this one: for the fuzz harness
+// (fuzz/harness) and the tests.
 #[cfg(feature = "internals")]
 mod raw;
 
