@@ -53,8 +53,9 @@ pub struct Limits {
     /// × channels), and twice the picture drawn (measured peaks are below it: 380–410 bytes per
     /// sample, 4.0 per coefficient at the default quality and 5.4 for a lossless file, 1.0–1.6
     /// times the picture; MEASUREMENTS.md). A thumbnail holds much less than the account of its
-    /// refinement. The default 4 GiB refuses nothing within the other defaults' samples but
-    /// refinements beyond about 170 megapixels of RGB.
+    /// refinement. The default 4 GiB refuses no file of levels within the other defaults, and a
+    /// refinement beyond about 140 megapixels of RGB (30 bytes a pixel: 24 for its coefficients,
+    /// 6 for its picture) or 100 of RGBA.
     pub max_alloc: u64,
 }
 
