@@ -55,7 +55,7 @@ pub struct Limits {
     /// times the picture; MEASUREMENTS.md). A thumbnail holds much less than the account of its
     /// refinement. The default 4 GiB refuses no file of levels within the other defaults, and a
     /// refinement beyond about 140 megapixels of RGB (30 bytes a pixel: 24 for its coefficients,
-    /// 6 for its picture) or 100 of RGBA.
+    /// 6 for its picture) or 110 of RGBA.
     pub max_alloc: u64,
 }
 
