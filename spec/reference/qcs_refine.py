@@ -6,7 +6,7 @@ in Python with the standard library only. The container (header, levels, the R c
 refinement header and segment tables) comes from qcs_ref.py, the spec-only decoder of the
 samples next to this file; this file adds the refinement:
 
-* refinement.md §1, the coded channels (YCoCg-R, centred, times 2^F);
+* refinement.md §1, the coded channels (times 2^F, YCoCg-R, centred);
 * §2, the inverse of the integer 5/3 or 9/7 lifting transform, 32-bit wrap-around;
 * §3, the bands, their 32 x 32 blocks in spread order, stripes, the L + 1 streams;
 * §4, the prediction of the low-low band from the levels' samples;
@@ -50,27 +50,36 @@ CODED = {
 }
 
 
-def to_coded(colour, layout):
-    """A colour in layout channels -> coded channels, centred (§1), not times 2^F."""
+def to_coded(colour, layout, F):
+    """A colour in layout channels -> coded channels with F fraction bits, centred (§1):
+    the layout values times 2^F, YCoCg-R, minus 128 * 2^F in the centred channels."""
+    colour = [v << F for v in colour]
+    centre = 128 << F
     if layout < 2:
-        return [v - 128 for v in colour]
+        return [v - centre for v in colour]
     R, G, B = colour[0], colour[1], colour[2]
     Co = R - B
     t = B + (Co >> 1)
     Cg = G - t
     Y = t + (Cg >> 1)
-    out = [Y - 128, Co, Cg]
+    out = [Y - centre, Co, Cg]
     if layout == 3:
-        out.append(colour[3] - 128)
+        out.append(colour[3] - centre)
     return out
 
 
 def from_coded(vals, layout, F=0):
-    """Coded channel values (not centred, F fraction bits) -> layout channels: inverse
-    YCoCg-R on the fixed-point values, then each channel rounded to a whole level (halves
-    up) and clamped (§8)."""
+    """Coded channel values (not centred, F fraction bits) -> layout channels (§8): for
+    F >= 1 the values doubled (S = F + 1 fraction bits), else as they are (S = 0); inverse
+    YCoCg-R; each channel rounded to a whole level (halves to even) and clamped."""
+    D = 1 if F >= 1 else 0
+    S = F + D
+    vals = [v << D for v in vals]
+
     def level(v):
-        return max(0, min(255, (v + ((1 << F) >> 1)) >> F))
+        if S > 0:
+            v = (v + (1 << (S - 1)) - 1 + ((v >> S) & 1)) >> S
+        return max(0, min(255, v))
     if layout < 2:
         return tuple(level(v) for v in vals)
     Y, Co, Cg = vals[0], vals[1], vals[2]
@@ -205,7 +214,7 @@ def splits(W, H, L):
 
 def ll_prediction(h, ref, values, positions, wL, hL):
     """pred[c][j][i] for LL coefficient (i, j) in coded channel c (§4). values: each
-    sample's centred coded-channel values; positions: its (X, Y) in 1/256 px."""
+    sample's centred coded-channel values (F fraction bits, §1); positions: its (X, Y) in 1/256 px."""
     L, F = ref.L, ref.F
     G = 65536 if ref.wavelet == 0 else GAIN97[splits(h.W, h.H, L)]
     nc = len(CODED[h.layout])
@@ -220,7 +229,7 @@ def ll_prediction(h, ref, values, positions, wL, hL):
             wsum = sum(ws)
             for c in range(nc):
                 p = (sum(w * values[k][c] for w, (_, k) in zip(ws, near)) + wsum // 2) // wsum
-                pred[c][j][i] = (p * (1 << F) * G + (1 << 15)) >> 16
+                pred[c][j][i] = (p * G + (1 << 15)) >> 16
     return pred
 
 
@@ -533,7 +542,7 @@ def refined_picture(h, colours, stats=None):
     # §4: the prediction of LL from all N samples
     site_list = qcs_ref.sites(len(colours), W, H, h.L, h.Cx, h.Cy)
     positions = [qcs_ref.fixed_position(st["n"], h.L, h.Cx, h.Cy) for st in site_list]
-    values = [to_coded(col, layout) for col in colours]
+    values = [to_coded(col, layout, F) for col in colours]
     wL, hL = bands[0].w, bands[0].h
     pred = ll_prediction(h, ref, values, positions, wL, hL)
     # §7: coefficient values into each channel's plane; §2: inverse transform

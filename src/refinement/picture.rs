@@ -2,9 +2,11 @@
 //!
 //! The coded channels are those of the predictive coding: grey (and alpha) as they are, R, G, B
 //! as YCoCg-R (`Co = R − B`, `t = B + (Co >> 1)`, `Cg = G − t`, `Y = t + (Cg >> 1)`), then
-//! alpha. Channels with the range 0..=255 (grey, Y, alpha) are centred by subtracting 128;
-//! every value is then multiplied by 2^F, F the file's fraction bits (lossy files code a
-//! little below the integer grid, where the 9/7 steps round).
+//! alpha, all computed on the layout values times 2^F, F the file's fraction bits (lossy files
+//! code a little below the integer grid, where the 9/7 steps round). Channels with the range
+//! 0..=255 (grey, Y, alpha) are centred by subtracting 128·2^F. The picture undoes YCoCg-R on
+//! the same fixed-point values, so the two are exact inverses at every F: a flat colour's
+//! planes and picture agree, and no channel is biased by YCoCg-R's floors.
 
 use super::bitplane::{BandState, StreamState};
 use super::resample::Axis;
@@ -20,44 +22,50 @@ pub(crate) fn to_planes(pixels: &[u8], channels: usize, frac: u32) -> Vec<Vec<i3
     let n = pixels.len() / channels;
     let mut planes: Vec<Vec<i32>> = (0..channels).map(|_| Vec::with_capacity(n)).collect();
     for px in pixels.chunks_exact(channels) {
-        let coded = coded_channels(px);
+        let coded = coded_channels(px, frac);
         for (c, plane) in planes.iter_mut().enumerate() {
-            plane.push(coded[c] << frac);
+            plane.push(coded[c]);
         }
     }
     planes
 }
 
-/// One pixel's coded channel values (centred), from its layout channel values.
-pub(crate) fn coded_channels(px: &[u8]) -> [i32; 4] {
+/// One pixel's coded channel values (centred, with `f` fraction bits), from its layout
+/// channel values.
+pub(crate) fn coded_channels(px: &[u8], f: u32) -> [i32; 4] {
+    let v = |k: usize| (px[k] as i32) << f;
+    let centre = 128 << f;
     let mut out = [0; 4];
     if px.len() >= 3 {
-        let (r, g, b) = (px[0] as i32, px[1] as i32, px[2] as i32);
+        let (r, g, b) = (v(0), v(1), v(2));
         let co = r - b;
         let t = b + (co >> 1);
         let cg = g - t;
-        out[0] = t + (cg >> 1) - 128;
+        out[0] = t + (cg >> 1) - centre;
         out[1] = co;
         out[2] = cg;
         if px.len() == 4 {
-            out[3] = px[3] as i32 - 128;
+            out[3] = v(3) - centre;
         }
     } else {
-        for (o, &v) in out.iter_mut().zip(px) {
-            *o = v as i32 - 128;
+        for (k, o) in out.iter_mut().take(px.len()).enumerate() {
+            *o = v(k) - centre;
         }
     }
     out
 }
 
 /// Coded channel values (centred, with `f` fraction bits) → a pixel's layout values: YCoCg-R
-/// undone on the fixed-point values, then each layout channel rounded to nearest (halves up)
-/// and clamped to 0..=255, so that the channels' fractions are not rounded separately first.
+/// undone on the fixed-point values, doubled first when `f ≥ 1` so that its floors are exact
+/// halves, then each layout channel rounded to nearest (halves to even) and clamped to
+/// 0..=255 (spec/refinement.md §8). Undone so, a lossy picture has no bias: the floors of
+/// YCoCg-R, or rounding halves up, would each add about a tenth of a level to the mean.
 #[inline]
 fn layout_values(coded: &[i32], out: &mut [u8], f: u32) {
-    let level = |v: i64| ((v + ((1 << f) >> 1)) >> f).clamp(0, 255) as u8;
-    let centre = 128i64 << f;
-    let coded: [i64; 4] = std::array::from_fn(|c| coded.get(c).copied().unwrap_or(0) as i64);
+    let (d, s) = doubling(f);
+    let level = |v: i64| round_shift(v, s).clamp(0, 255) as u8;
+    let centre = 128i64 << s;
+    let coded: [i64; 4] = std::array::from_fn(|c| (coded.get(c).copied().unwrap_or(0) as i64) << d);
     if out.len() >= 3 {
         let t = coded[0] + centre - (coded[2] >> 1);
         let g = coded[2] + t;
@@ -74,6 +82,33 @@ fn layout_values(coded: &[i32], out: &mut [u8], f: u32) {
             *o = level(v + centre);
         }
     }
+}
+
+/// The doubling of the picture's inverse YCoCg-R for `f` fraction bits: the shift `d` of the
+/// coded values (1 when `f ≥ 1`) and the fraction bits `s = f + d` of the result.
+fn doubling(f: u32) -> (u32, u32) {
+    let d = (f != 0) as u32;
+    (d, f + d)
+}
+
+/// `v / 2^s` rounded to nearest, halves to the even neighbour (`v` itself for `s = 0`).
+#[inline]
+fn round_shift<T>(v: T, s: u32) -> T
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Shl<u32, Output = T>
+        + std::ops::Shr<u32, Output = T>
+        + std::ops::BitAnd<Output = T>
+        + From<i8>,
+{
+    if s == 0 {
+        return v;
+    }
+    let one = T::from(1);
+    let half_below = (one << (s - 1)) - one;
+    (v + half_below + ((v >> s) & one)) >> s
 }
 
 /// The inverse of the gain on a constant of n one-dimensional splits of the integer 9/7,
@@ -345,13 +380,13 @@ fn layout_run<const N: usize>(coded: &[[i32; RUN]; N], out: &mut [u8], f: u32) {
         }
         return;
     }
-    let half = (1 << f) >> 1;
-    let centre = 128 << f;
-    let level = |v: i32| ((v + half) >> f).clamp(0, 255) as u8;
+    let (d, s) = doubling(f);
+    let centre = 128 << s;
+    let level = |v: i32| round_shift(v, s).clamp(0, 255) as u8;
     if N >= 3 {
         let mut rgb = [[0u8; RUN]; 3];
         for i in 0..len {
-            let (y, co, cg) = (coded[0][i], coded[1][i], coded[2][i]);
+            let (y, co, cg) = (coded[0][i] << d, coded[1][i] << d, coded[2][i] << d);
             let t = y + centre - (cg >> 1);
             let b = t - (co >> 1);
             rgb[0][i] = level(b + co);
@@ -363,13 +398,13 @@ fn layout_run<const N: usize>(coded: &[[i32; RUN]; N], out: &mut [u8], f: u32) {
             px[1] = rgb[1][i];
             px[2] = rgb[2][i];
             if N == 4 {
-                px[3] = level(coded[N - 1][i] + centre);
+                px[3] = level((coded[N - 1][i] << d) + centre);
             }
         }
     } else {
         for (i, px) in out.chunks_exact_mut(N).enumerate() {
             for (c, o) in px.iter_mut().enumerate() {
-                *o = level(coded[c][i] + centre);
+                *o = level((coded[c][i] << d) + centre);
             }
         }
     }
@@ -388,10 +423,47 @@ mod tests {
             [3, 200, 77, 128],
         ] {
             for n in 1..=4 {
-                let c = coded_channels(&px[..n]);
-                let mut back = [0u8; 4];
-                layout_values(&c[..n], &mut back[..n], 0);
-                assert_eq!(back[..n], px[..n], "{n} channels");
+                for f in 0..=3 {
+                    let c = coded_channels(&px[..n], f);
+                    let mut back = [0u8; 4];
+                    layout_values(&c[..n], &mut back[..n], f);
+                    assert_eq!(back[..n], px[..n], "{n} channels, {f} fraction bits");
+                }
+            }
+        }
+    }
+
+    /// A lossy picture has no bias: over every fixed-point (Y, Co, Cg) of a range of whole
+    /// levels, the mean of the layout values drawn minus the linear YCoCg inverse's exact
+    /// values is below a hundredth of a level (YCoCg-R's floors on these values, or rounding
+    /// halves up, each give about +0.06 to +0.13).
+    #[test]
+    fn lossy_pictures_are_not_biased() {
+        for f in 1..=3u32 {
+            let one = 1i32 << f;
+            let (mut sum, mut n) = ([0f64; 3], 0f64);
+            for y in (-20 * one)..(20 * one) {
+                for co in (-9 * one)..(9 * one) {
+                    for cg in (-9 * one)..(9 * one) {
+                        let mut px = [0u8; 3];
+                        layout_values(&[y, co, cg], &mut px, f);
+                        let (y, co, cg) = (y as f64, co as f64, cg as f64);
+                        let t = y + 128.0 * one as f64 - cg / 2.0;
+                        let b = t - co / 2.0;
+                        let exact = [b + co, cg + t, b].map(|v| v / one as f64);
+                        for c in 0..3 {
+                            sum[c] += px[c] as f64 - exact[c];
+                        }
+                        n += 1.0;
+                    }
+                }
+            }
+            for (c, s) in sum.iter().enumerate() {
+                assert!(
+                    (s / n).abs() < 0.01,
+                    "f {f}, channel {c}: mean error {}",
+                    s / n
+                );
             }
         }
     }

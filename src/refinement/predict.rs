@@ -4,7 +4,8 @@
 //! 2^L × 2^L pixels. The levels already say much of it: coefficient (i, j) is predicted as the
 //! predictive coding would predict a sample at the centre of pixel (i·2^L, j·2^L) from all the
 //! samples of the levels (its [`NEIGHBOURS`] nearest, inverse squared distance weights, in
-//! exact integer arithmetic), times 2^F and the band's gain on a constant.
+//! exact integer arithmetic, on the samples' coded values with F fraction bits), times the band's
+//! gain on a constant.
 
 use crate::coding::predictive::{weighted_mean, weights, NEIGHBOURS, POS_ONE};
 
@@ -146,7 +147,10 @@ pub(crate) fn low_band(
 ) -> Vec<Vec<i32>> {
     let (lw, lh) = low_size(width, height, levels);
     let mut out = vec![Vec::with_capacity(lw * lh); channels];
-    let values: Vec<[i32; 4]> = colours.chunks_exact(channels).map(coded_channels).collect();
+    let values: Vec<[i32; 4]> = colours
+        .chunks_exact(channels)
+        .map(|c| coded_channels(c, frac))
+        .collect();
     let grid = NearestGrid::new(positions, width as i64 * POS_ONE, height as i64 * POS_ONE);
     let gain = low_gain(kernel, width, height, levels);
     let step = (1i64 << levels) * POS_ONE;
@@ -166,7 +170,7 @@ pub(crate) fn low_band(
                         .sum();
                     weighted_mean(acc, wsum)
                 };
-                plane.push((((p as i64) << frac) * gain + (1 << 15)).div_euclid(1 << 16) as i32);
+                plane.push((p as i64 * gain + (1 << 15)).div_euclid(1 << 16) as i32);
             }
         }
     }

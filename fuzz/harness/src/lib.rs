@@ -661,7 +661,9 @@ fn roundtrip_on_one_thread(data: &[u8]) {
             // (regressions `constant-21x3-7bit-quality-55`: 157 from the levels for 156, and
             // the 9/7's fixed-point rounding draws 158 on alternate pixels of the middle row;
             // `constant-16x23-7bit-quality-89`, which was 3 off before the picture undid
-            // YCoCg-R before rounding).
+            // YCoCg-R before rounding; `constant-16x23-7bit-quality-89-odd-co`, 3 off in blue
+            // before the planes and the low band's prediction took YCoCg-R on fixed-point
+            // values, as the picture undoes it).
             Target::Quality(q) if constant && q >= 50 && bits >= 7 => assert!(
                 got.iter()
                     .zip(pixels.iter())
