@@ -63,7 +63,9 @@ pub(crate) fn coded_channels(px: &[u8], f: u32) -> [i32; 4] {
 #[inline]
 fn layout_values(coded: &[i32], out: &mut [u8], f: u32) {
     let (d, s) = doubling(f);
-    let level = |v: i64| round_shift(v, s).clamp(0, 255) as u8;
+    let (below, odd) = rounding(s);
+    let (below, odd) = (below as i64, odd as i64);
+    let level = |v: i64| ((v + below + ((v >> s) & odd)) >> s).clamp(0, 255) as u8;
     let centre = 128i64 << s;
     let coded: [i64; 4] = std::array::from_fn(|c| (coded.get(c).copied().unwrap_or(0) as i64) << d);
     if out.len() >= 3 {
@@ -91,24 +93,12 @@ fn doubling(f: u32) -> (u32, u32) {
     (d, f + d)
 }
 
-/// `v / 2^s` rounded to nearest, halves to the even neighbour (`v` itself for `s = 0`).
-#[inline]
-fn round_shift<T>(v: T, s: u32) -> T
-where
-    T: Copy
-        + std::ops::Add<Output = T>
-        + std::ops::Sub<Output = T>
-        + std::ops::Shl<u32, Output = T>
-        + std::ops::Shr<u32, Output = T>
-        + std::ops::BitAnd<Output = T>
-        + From<i8>,
-{
-    if s == 0 {
-        return v;
-    }
-    let one = T::from(1);
-    let half_below = (one << (s - 1)) - one;
-    (v + half_below + ((v >> s) & one)) >> s
+/// The terms of `v / 2^s` rounded to nearest, halves to the even neighbour, as
+/// `(v + below + ((v >> s) & odd)) >> s`: `below = 2^(s−1) − 1` and `odd = 1` for s ≥ 1,
+/// both 0 for s = 0 (`v` itself). Branch-free, so that a run of pixels vectorises.
+fn rounding(s: u32) -> (i32, i32) {
+    let odd = (s != 0) as i32;
+    (((1 << s) >> 1) - odd, odd)
 }
 
 /// The inverse of the gain on a constant of n one-dimensional splits of the integer 9/7,
@@ -382,7 +372,8 @@ fn layout_run<const N: usize>(coded: &[[i32; RUN]; N], out: &mut [u8], f: u32) {
     }
     let (d, s) = doubling(f);
     let centre = 128 << s;
-    let level = |v: i32| round_shift(v, s).clamp(0, 255) as u8;
+    let (below, odd) = rounding(s);
+    let level = |v: i32| ((v + below + ((v >> s) & odd)) >> s).clamp(0, 255) as u8;
     if N >= 3 {
         let mut rgb = [[0u8; RUN]; 3];
         for i in 0..len {
