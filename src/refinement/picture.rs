@@ -426,8 +426,8 @@ mod tests {
 
     /// A lossy picture has no bias: over every fixed-point (Y, Co, Cg) of a range of whole
     /// levels, the mean of the layout values drawn minus the linear YCoCg inverse's exact
-    /// values is below a hundredth of a level (YCoCg-R's floors on these values, or rounding
-    /// halves up, each give about +0.06 to +0.13).
+    /// values is below a hundredth of a level (rounding halves up gives +0.125 at f = 1, and
+    /// YCoCg-R's floors without the doubling +0.25).
     #[test]
     fn lossy_pictures_are_not_biased() {
         for f in 1..=3u32 {
