@@ -351,6 +351,27 @@ fn decode_png(bytes: &[u8]) -> DynamicImage {
         .image
 }
 
+/// The other size each vector's whole file is drawn at (`NAME.WxH.png`): wider and less
+/// high than the image, so that both rules of refinement.md §8 (*At another size*) and the
+/// levels' picture at other pixel centres are checked.
+fn other_size(width: u32, height: u32) -> (u32, u32) {
+    (width + width / 2 + 1, (2 * height / 3).max(1))
+}
+
+/// The whole file decoded at [`other_size`] (the spec's picture, not a thumbnail), and the
+/// name of its PNG.
+fn decode_at_other_size(name: &str, bytes: &[u8]) -> (String, qcs::DecodedImage) {
+    let (h, _) = Header::parse(bytes).expect("own header");
+    let (w, h) = other_size(h.width, h.height);
+    let opts = DecodeOptions {
+        size: Some((w, h)),
+        thumbnail: false,
+        ..Default::default()
+    };
+    let decoded = qcs::decode(bytes, &opts).expect("vector decodes");
+    (format!("{name}.{w}x{h}.png"), decoded)
+}
+
 /// Every sample a decoder reads from `bytes`, as CSV: index, lattice point, position (6
 /// decimals), colour channels in the file's layout.
 fn samples_csv(bytes: &[u8]) -> String {
@@ -438,6 +459,8 @@ fn regenerate() {
             &dir().join(format!("{}.half.png", v.name)),
             &decode_png(&bytes[..bytes.len() / 2]),
         );
+        let (other, decoded) = decode_at_other_size(v.name, &bytes);
+        write_png(&dir().join(other), &decoded.image);
         for (suffix, prefix) in [
             ("samples.csv", bytes.len()),
             ("half.samples.csv", bytes.len() / 2),
@@ -487,6 +510,10 @@ fn regenerate() {
          - `NAME.half.png`: the first ⌊len / 2⌋ bytes decoded the same way (a cut download: the\n  \
            verified levels plus the complete, unverified samples of the partial level chunk, or\n  \
            in version 3 the refinement's picture from the bytes of its streams received).\n\
+         - `NAME.WxH.png`: the whole file decoded at another size, W = w + ⌊w/2⌋ + 1 and\n  \
+           H = max(1, ⌊2h/3⌋) for a w × h image: the levels' picture at the output's pixel\n  \
+           centres (spec/reconstruction.md), or the refinement's resized by both rules of\n  \
+           spec/refinement.md §8, *At another size* (larger across, smaller down).\n\
          - `NAME.samples.csv`, `NAME.half.samples.csv`: the samples a decoder reads from the whole\n  \
            file and from its first half, exactly: `index,n0,n1,n2,n3,x,y,colour` (the site's\n  \
            lattice point, its pixel position to 6 decimals, its channels in the file's layout,\n  \
@@ -516,6 +543,22 @@ fn regenerate() {
     std::fs::write(dir().join("README.md"), readme).expect("write README");
 }
 
+/// Asserts that `decoded` is the vector PNG `name` (exactly for the refinement's picture,
+/// within the tolerance for the levels'), and says by how much it differs.
+fn matches_png(name: &str, decoded: &qcs::DecodedImage) -> String {
+    let path = dir().join(name);
+    let want = image::open(&path)
+        .unwrap_or_else(|e| panic!("{}: {e} (QCS_REGENERATE=1 writes it)", path.display()));
+    let tolerance = if decoded.refined { 0 } else { TOLERANCE };
+    let d = max_diff(&decoded.image, &want);
+    assert!(
+        d <= tolerance,
+        "{}: max channel difference {d} > {tolerance}",
+        path.display()
+    );
+    format!("{name}: max diff {d}")
+}
+
 fn regenerating() -> bool {
     std::env::var_os("QCS_REGENERATE").is_some_and(|v| v == "1")
 }
@@ -530,18 +573,9 @@ fn vectors_decode_to_their_samples_and_pngs() {
         let bytes = std::fs::read(dir().join(format!("{}.qcs", v.name)))
             .unwrap_or_else(|e| panic!("{}.qcs: {e} (QCS_REGENERATE=1 writes it)", v.name));
         for (half, prefix) in [("", bytes.len()), ("half.", bytes.len() / 2)] {
-            let path = dir().join(format!("{}.{half}png", v.name));
-            let want = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             let decoded =
                 qcs::decode(&bytes[..prefix], &DecodeOptions::default()).expect("decodes");
-            let tolerance = if decoded.refined { 0 } else { TOLERANCE };
-            let d = max_diff(&decoded.image, &want);
-            report.push(format!("{}.{half}png: max diff {d}", v.name));
-            assert!(
-                d <= tolerance,
-                "{}: max channel difference {d} > {tolerance}",
-                path.display()
-            );
+            report.push(matches_png(&format!("{}.{half}png", v.name), &decoded));
             let path = dir().join(format!("{}.{half}samples.csv", v.name));
             let want = std::fs::read_to_string(&path)
                 .unwrap_or_else(|e| panic!("{}: {e} (QCS_REGENERATE=1 writes it)", path.display()));
@@ -551,6 +585,8 @@ fn vectors_decode_to_their_samples_and_pngs() {
                 path.display()
             );
         }
+        let (other, decoded) = decode_at_other_size(v.name, &bytes);
+        report.push(matches_png(&other, &decoded));
         let path = dir().join(format!("{}.cuts.csv", v.name));
         let want = std::fs::read_to_string(&path)
             .unwrap_or_else(|e| panic!("{}: {e} (QCS_REGENERATE=1 writes it)", path.display()));

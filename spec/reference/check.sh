@@ -4,10 +4,11 @@
 # must equal NAME[.half].samples.csv (exactly; positions within 1e-5 px), and its first sites
 # of three image sizes must equal spec/vectors/sites-*.csv. Then checks the spec-only
 # picture (qcs_picture.py, spec/reconstruction.md): for every NAME.qcs, whole and half, every
-# channel of every pixel must be within +-1 of NAME[.half].png, and the worked example of
-# reconstruction.md §6 must give its three pixels. For a version-3 file (or prefix) whose
-# refinement header is complete the picture is the refinement's (qcs_refine.py,
-# spec/refinement.md) and must equal the PNG exactly; before, it is the levels' (+-1).
+# channel of every pixel must be within +-1 of NAME[.half].png (and the whole file drawn at
+# another size, of NAME.WxH.png), and the worked example of reconstruction.md §6 must give
+# its three pixels. For a version-3 file (or prefix) whose refinement header is complete the
+# picture is the refinement's (qcs_refine.py, spec/refinement.md, at another size resized by
+# its §8) and must equal the PNG exactly; before, it is the levels' (+-1).
 # Prints PASS/FAIL per case and exits 1 on any failure. Needs python3 only.
 set -u
 D=$(cd "$(dirname "$0")" && pwd)
@@ -58,7 +59,7 @@ for w, h in [(64, 64), (480, 320), (1000, 17)]:
 sys.exit(bad_any)
 PY
 python3 - "$D" "$V" <<'PY' || fail=1
-import glob, os, sys
+import glob, os, re, sys
 sys.path.insert(0, sys.argv[1])
 import qcs_picture as qp
 import qcs_refine as qr
@@ -66,16 +67,22 @@ bad_any = False
 for f in sorted(glob.glob(os.path.join(sys.argv[2], "*.qcs"))):
     name = os.path.basename(f)[:-4]
     data = open(f, "rb").read()
-    for tag, cut in ((name, len(data)), (name + ".half", len(data) // 2)):
+    # the whole file and its first half at the image's size, the whole file at another
+    cases = [(name, len(data), None), (name + ".half", len(data) // 2, None)]
+    for p in sorted(os.listdir(sys.argv[2])):
+        m = re.fullmatch(re.escape(name) + r"\.(\d+)x(\d+)\.png", p)
+        if m:
+            cases.append((p[:-4], len(data), (int(m.group(1)), int(m.group(2)))))
+    for tag, cut, size in cases:
         w, h, ch, want = qp.read_png(open(os.path.join(sys.argv[2], tag + ".png"), "rb").read())
         try:
             # the refinement's picture once its header is complete, else the levels' (qcs_picture)
-            head, got, refined = qr.picture_of_file(data[:cut])
+            head, got, refined = qr.picture_of_file(data[:cut], size=size)
         except Exception as err:
             print("FAIL picture %s: %s: %s" % (tag, type(err).__name__, err))
             bad_any = True
             continue
-        if head is None or (w, h, ch) != (head.W, head.H, head.channels):
+        if head is None or (w, h, ch) != (len(got[0]), len(got), head.channels):
             print("FAIL picture %s: the PNG is %dx%d with %d channels, the picture is not" % (tag, w, h, ch))
             bad_any = True
             continue

@@ -13,11 +13,12 @@ samples next to this file; this file adds the refinement:
 * §5, the passes of each stream in key order, cut by the header's key or counts;
 * §6, the bit-plane coder over each stream's bytes with format.md's range decoder, every
   byte after those received unknown, applied unit by unit;
-* §7, the coefficient values; §8, the picture at the image's size.
+* §7, the coefficient values; §8, the picture at the image's size and at any other.
 
 Usage:
   python3 qcs_refine.py FILE.qcs [BYTES] > out.png          # the picture as a PNG
   python3 qcs_refine.py FILE.qcs [BYTES] --compare REF.png  # equal to a PNG, exactly?
+  python3 qcs_refine.py FILE.qcs --size 71x22 > out.png     # at another size
 
 BYTES cuts the file to its first BYTES bytes (a cut download). Once the refinement header
 is complete the picture is the refinement's (this file); before, it is the levels' Gouraud
@@ -570,19 +571,65 @@ def refined_picture(h, colours, stats=None):
     return rows
 
 
-def picture_of_file(data, stats=None):
+def axis_weights(n, m):
+    """§8, at another size, one axis: for each of the m output pixels, [(input pixel,
+    integer weight)] from the n input pixels."""
+    out = []
+    for j in range(m):
+        if m < n:
+            # smaller: overlap of output [j·n, (j+1)·n) and input [x·m, (x+1)·m), in 1/m px
+            lo, hi = j * n, (j + 1) * n
+            out.append([(x, min(hi, (x + 1) * m) - max(lo, x * m))
+                        for x in range(lo // m, (hi + m - 1) // m)])
+        elif m > n:
+            # larger: t = ((2j+1)·n − m) / (2m) clamped to [0, n − 1], in units of 1/(2m)
+            t = min(max((2 * j + 1) * n - m, 0), (n - 1) * 2 * m)
+            x, f = divmod(t, 2 * m)
+            out.append([(x, 2 * m - f)] + ([(x + 1, f)] if f else []))
+        else:
+            out.append([(j, 1)])
+    return out
+
+
+def resized(pic, w, h):
+    """§8, at another size: the W x H picture pic (rows of tuples) at w x h, each axis by
+    its weights, each channel rounded once: floor((2·Σ + T) / (2·T)), T the weights' sum."""
+    W, H = len(pic[0]), len(pic)
+    wx, wy = axis_weights(W, w), axis_weights(H, h)
+    out = []
+    for j in range(h):
+        row = []
+        for i in range(w):
+            acc = [0] * len(pic[0][0])
+            total = 0
+            for y, ky in wy[j]:
+                for x, kx in wx[i]:
+                    k = kx * ky
+                    total += k
+                    for c, v in enumerate(pic[y][x]):
+                        acc[c] += k * v
+            row.append(tuple((2 * a + total) // (2 * total) for a in acc))
+        out.append(row)
+    return out
+
+
+def picture_of_file(data, stats=None, size=None):
     """(header, picture, refined) of a .qcs file or prefix: the refinement's picture once
-    its header is complete, else the levels' (qcs_picture.py). header is None when the
-    prefix ends inside the header."""
+    its header is complete, else the levels' (qcs_picture.py), at the image's size or at
+    size = (w, h). header is None when the prefix ends inside the header."""
     h, colours, _verified = qcs_ref.decode(data)
     if h is None:
         return None, None, False
+    w, hh = size or (h.W, h.H)
     if h.refinement is None or not h.refinement.header_complete:
-        # the levels' picture (reconstruction.md), as qcs_picture.picture_of_file draws it
+        # the levels' picture (reconstruction.md), as qcs_picture.picture_of_file draws it,
+        # at the output's pixel centres
         site_list = qcs_ref.sites(len(colours), h.W, h.H, h.L, h.Cx, h.Cy) if colours else []
         samples = [(s["n"], c) for s, c in zip(site_list, colours)]
-        return h, qcs_picture.picture(samples, h.W, h.H, h.L, h.Cx, h.Cy, h.channels), False
-    return h, refined_picture(h, colours, stats), True
+        pic = qcs_picture.picture(samples, h.W, h.H, h.L, h.Cx, h.Cy, h.channels, w, hh)
+        return h, pic, False
+    pic = refined_picture(h, colours, stats)
+    return h, pic if (w, hh) == (h.W, h.H) else resized(pic, w, hh), True
 
 
 def main(argv):
@@ -592,6 +639,11 @@ def main(argv):
         k = args.index("--compare")
         ref = args[k + 1]
         del args[k:k + 2]
+    size = None
+    if "--size" in args:
+        k = args.index("--size")
+        size = tuple(int(v) for v in args[k + 1].split("x"))
+        del args[k:k + 2]
     if not args:
         sys.stderr.write(__doc__)
         sys.exit(2)
@@ -600,7 +652,7 @@ def main(argv):
         data = data[:int(args[1])]
     stats = []
     try:
-        h, pic, refined = picture_of_file(data, stats)
+        h, pic, refined = picture_of_file(data, stats, size)
     except qcs_ref.QcsError as err:
         sys.stderr.write("error: %s\n" % err)
         sys.exit(1)
@@ -613,9 +665,9 @@ def main(argv):
         sys.stdout.buffer.write(qcs_picture.png_bytes(pic, h.channels))
         return
     w, hh, ch, want = qcs_picture.read_png(open(ref, "rb").read())
-    if (w, hh, ch) != (h.W, h.H, h.channels):
+    if (w, hh, ch) != (len(pic[0]), len(pic), h.channels):
         print("FAIL: %s is %dx%d with %d channels, the picture %dx%d with %d"
-              % (ref, w, hh, ch, h.W, h.H, h.channels))
+              % (ref, w, hh, ch, len(pic[0]), len(pic), h.channels))
         sys.exit(1)
     worst, off1, first = qcs_picture.compare(want, pic)
     tolerance = 0 if refined else 1
