@@ -45,6 +45,19 @@ impl Vector {
 /// a decoder makes of them is still fixed by the spec (the range decoder's `hi < range`
 /// rule, the transform's 32-bit wrap-around, the clamps).
 fn garbage_streams(image: &DynamicImage, opts: &EncodeOptions) -> Vec<u8> {
+    crafted_refinement(image, opts, 2, 30)
+}
+
+/// Like [`garbage_streams`] with one fraction bit (F = 1, which no qcs encoder writes: the
+/// coded channels' YCoCg-R then floors, and the picture rounds from 2 fraction bits) and 5
+/// bit-planes a channel, so that most pixels stay within 0..=255 and the rounding shows.
+fn garbage_streams_f1(image: &DynamicImage, opts: &EncodeOptions) -> Vec<u8> {
+    crafted_refinement(image, opts, 1, 5)
+}
+
+/// The encoder's levels, then a 9/7 refinement (L = 2) of fraction bits `f` and `bitplanes`
+/// a channel, every pass, in two layers of patterned bytes.
+fn crafted_refinement(image: &DynamicImage, opts: &EncodeOptions, f: u8, bitplanes: u8) -> Vec<u8> {
     use qcs::container::{ContainerWriter, PassLimit, RefinementHeader, Wavelet};
     let levels = EncodeOptions {
         target: Target::LevelsOnly,
@@ -71,9 +84,9 @@ fn garbage_streams(image: &DynamicImage, opts: &EncodeOptions) -> Vec<u8> {
     let channels = header.layout.channels() as usize;
     let r = RefinementHeader {
         wavelet: Wavelet::Integer97,
-        fraction_bits: 2,
+        fraction_bits: f,
         levels: 2,
-        bitplanes: vec![30; channels],
+        bitplanes: vec![bitplanes; channels],
         layers: 2,
         limit: PassLimit::Key(i32::MIN),
     };
@@ -341,6 +354,20 @@ fn vectors() -> Vec<Vector> {
                 ..Default::default()
             },
             craft: Some(garbage_streams),
+        },
+        Vector {
+            name: "rgba-refined-f1",
+            what: "made by hand: the encoder's levels, then a refinement with one fraction bit (F = 1, \
+                   which qcs does not write: YCoCg-R floors in the prediction's coded channels) and two \
+                   layers of patterned bytes under 5 bit-planes a channel",
+            image: rgba(27, 22),
+            opts: EncodeOptions {
+                target: Target::Quality(50),
+                samples: Some(64),
+                first_level: 64,
+                ..Default::default()
+            },
+            craft: Some(garbage_streams_f1),
         },
     ]
 }
@@ -625,6 +652,8 @@ fn vectors_cover_what_the_set_promises() {
     let (mut lossy, mut lossless, mut by_key, mut by_count, mut half_refined) =
         (false, false, false, false, false);
     let mut refined_layouts = Vec::new();
+    // Every fraction bit count the format allows (refinement.md §1: 0..=3).
+    let mut fractions = [false; 4];
     // Headers with the format byte's defaults bit and without it.
     let mut defaults = [false; 2];
     for v in vectors() {
@@ -645,6 +674,7 @@ fn vectors_cover_what_the_set_promises() {
             assert_eq!(ins.layers_verified, r.layers, "{}: complete", v.name);
             refined_layouts.push(h.layout);
             lossy |= r.wavelet == qcs::container::Wavelet::Integer97;
+            fractions[usize::from(r.fraction_bits)] = true;
             lossless |= r.wavelet == qcs::container::Wavelet::Reversible53;
             by_key |= matches!(r.limit, qcs::container::PassLimit::Key(_));
             by_count |= matches!(r.limit, qcs::container::PassLimit::Counts(_));
@@ -671,6 +701,7 @@ fn vectors_cover_what_the_set_promises() {
         );
     }
     assert!(lossy && lossless && by_key && by_count && half_refined);
+    assert_eq!(fractions, [true; 4], "F = 0..=3 (refinement.md §1)");
 }
 
 /// The decoder written from the spec alone (`spec/reference/qcs_ref.py`) reads exactly the
