@@ -9,11 +9,13 @@
 //! the bytes do not decide is rolled back (it resumes there when more bytes arrive); with
 //! bytes to spare, it codes a whole block at a time with no journal.
 //!
-//! Per coefficient the state is 3 bytes: its magnitude bits below 2^16 and one byte of flags
-//! (the bits from 2^16 up, which no file an encoder writes for 8-bit pictures has, go to a
-//! second array made when first needed); the lowest bit-plane known of a significant
-//! coefficient is its band's current bit-plane or the one above, told apart by a parity flag
-//! (every significant coefficient is refined at every bit-plane).
+//! Per coefficient the state is 4 bytes, made a block at a time when a pass first codes the
+//! block (most blocks of a lossy file's fine bands never are): its magnitude bits below 2^16,
+//! a byte of flags and a byte of its neighbours' significance (the bits from 2^16 up, which
+//! no file an encoder writes for 8-bit pictures has, go to a band-wide array made when first
+//! needed). The lowest bit-plane known of a significant coefficient is its band's current
+//! bit-plane or the one above, told apart by a parity flag (every significant coefficient is
+//! refined at every bit-plane).
 
 use super::schedule::{block_order, Band, Orient, Pass, PassKind, BLOCK};
 use super::written_zeros;
@@ -129,18 +131,53 @@ const fn sig_context(orient: Orient, h: u32, v: u32, d: u32) -> usize {
     }
 }
 
+/// The state of one block's coefficients, row-major with rows of [`BLOCK`] (a block at the
+/// band's right or bottom edge uses the top-left part; the rest is never coded).
+#[derive(Clone, Debug)]
+struct Block {
+    flags: [Flags; BLOCK * BLOCK],
+    /// The magnitude bits known so far, below 2^16.
+    low: [u16; BLOCK * BLOCK],
+}
+
+/// No block state (see [`BandState::slot`]).
+const UNOPENED: u32 = u32::MAX;
+
+/// Where a coefficient is within its block.
+#[inline(always)]
+fn local(x: usize, y: usize) -> usize {
+    (y % BLOCK) * BLOCK + x % BLOCK
+}
+
+/// The 8 neighbours of a coefficient, as (dx, dy) and the bit of the neighbour pattern that
+/// this coefficient is for that neighbour: for the one on the right, it is on the left…
+const TELLS: [(isize, isize, u8); 8] = [
+    (1, 0, N_LEFT),
+    (-1, 0, N_RIGHT),
+    (0, 1, N_UP),
+    (0, -1, N_DOWN),
+    (1, 1, 0x10),
+    (-1, 1, 0x20),
+    (1, -1, 0x40),
+    (-1, -1, 0x80),
+];
+
 /// One band of one channel, with what is known of its coefficients.
+///
+/// A block's state is made when a pass first codes its coefficients (its flag in a cleanup
+/// pass is 1): until then they are all zero and insignificant, and most blocks of the fine
+/// bands of a lossy file stay so. So a band holds 4 bytes per coefficient of its opened
+/// blocks only.
 #[derive(Clone, Debug)]
 pub(crate) struct BandState {
     pub band: Band,
     pub class: ChannelClass,
-    /// Row stride of `flags`: the band's width plus a border column on each side.
-    pw: usize,
-    /// Per coefficient, with a one-coefficient border (never significant): its [`Flags`].
-    flags: Vec<Flags>,
-    /// The magnitude bits known so far, below 2^16 (row-major, the band's width)…
-    low: Vec<u16>,
-    /// … and from 2^16 up (empty until the first).
+    /// Blocks across.
+    bw: usize,
+    /// Per block (row-major), the index of its state in `blocks`, or [`UNOPENED`].
+    slot: Vec<u32>,
+    blocks: Vec<Block>,
+    /// The magnitude bits from 2^16 up, row-major over the band (empty until the first).
     high: Vec<u16>,
     /// The bit-plane of the band's latest pass.
     current: u8,
@@ -155,14 +192,13 @@ pub(crate) struct BandState {
 
 impl BandState {
     pub(crate) fn new(band: Band, class: ChannelClass, truth: Vec<i32>) -> BandState {
-        let pw = band.w + 2;
         let (bw, bh) = band.blocks();
         BandState {
             band,
             class,
-            pw,
-            flags: Vec::new(),
-            low: Vec::new(),
+            bw,
+            slot: vec![UNOPENED; bw * bh],
+            blocks: Vec::new(),
             high: Vec::new(),
             current: 0,
             block_active: vec![false; bw * bh],
@@ -172,18 +208,62 @@ impl BandState {
         }
     }
 
-    /// Makes the coefficients' state (a band is allocated when its stream is first coded:
-    /// a decoder that skips a stream never holds its bands).
-    fn allocate(&mut self) {
-        if self.flags.is_empty() {
-            self.flags = written_zeros(self.pw * (self.band.h + 2));
-            self.low = written_zeros(self.band.len());
+    /// The block of coefficient (x, y).
+    #[inline(always)]
+    fn block_of(&self, x: usize, y: usize) -> usize {
+        (y / BLOCK) * self.bw + x / BLOCK
+    }
+
+    /// The state of block `blk` (row-major index), made now if it has none: its coefficients
+    /// insignificant, those on its edges told of their significant neighbours in other
+    /// blocks. Returns its index in `blocks`.
+    fn open(&mut self, blk: usize) -> usize {
+        if self.slot[blk] != UNOPENED {
+            return self.slot[blk] as usize;
+        }
+        let s = self.blocks.len();
+        self.blocks.push(Block {
+            flags: [0; BLOCK * BLOCK],
+            low: [0; BLOCK * BLOCK],
+        });
+        self.slot[blk] = s as u32;
+        let (x0, y0) = ((blk % self.bw) * BLOCK, (blk / self.bw) * BLOCK);
+        let cols = BLOCK.min(self.band.w - x0);
+        let rows = BLOCK.min(self.band.h - y0);
+        for y in y0..y0 + rows {
+            for x in x0..x0 + cols {
+                if x == x0 || y == y0 || x + 1 == x0 + cols || y + 1 == y0 + rows {
+                    self.blocks[s].flags[local(x, y)] =
+                        (self.pattern_at(x, y) as Flags) << NEIGHBOURS;
+                }
+            }
+        }
+        s
+    }
+
+    /// The flags of coefficient (x + dx, y + dy): 0 outside the band or in a block with no
+    /// state.
+    #[inline(always)]
+    fn flags_near(&self, x: usize, y: usize, dx: isize, dy: isize) -> Flags {
+        let (nx, ny) = (x.wrapping_add_signed(dx), y.wrapping_add_signed(dy));
+        if nx >= self.band.w || ny >= self.band.h {
+            return 0;
+        }
+        match self.slot[self.block_of(nx, ny)] {
+            UNOPENED => 0,
+            s => self.blocks[s as usize].flags[local(nx, ny)],
         }
     }
 
+    /// The flags of coefficient (x, y), whose block has state `s`.
     #[inline(always)]
-    fn fi(&self, x: usize, y: usize) -> usize {
-        (y + 1) * self.pw + x + 1
+    fn flags(&self, s: usize, x: usize, y: usize) -> Flags {
+        self.blocks[s].flags[local(x, y)]
+    }
+
+    #[inline(always)]
+    fn flags_mut(&mut self, s: usize, x: usize, y: usize) -> &mut Flags {
+        &mut self.blocks[s].flags[local(x, y)]
     }
 
     /// The reconstruction of a coefficient from its flags and magnitude bits, the band's
@@ -205,38 +285,53 @@ impl BandState {
     /// The lowest bit-plane known of coefficient (x, y), if it is significant.
     #[cfg(test)]
     pub(crate) fn known(&self, x: usize, y: usize) -> Option<u32> {
-        let f = self.flags[self.fi(x, y)];
+        let f = self.flags_near(x, y, 0, 0);
         (f & SIG != 0)
             .then(|| self.current as u32 + ((f & ODD != 0) != (self.current & 1 == 1)) as u32)
     }
 
-    /// The magnitude bits of coefficient `i` (band-local index).
-    #[inline(always)]
+    /// The magnitude bits of coefficient `i` (band-local, row-major index).
+    #[cfg(test)]
     pub(crate) fn mag(&self, i: usize) -> u32 {
+        let (x, y) = (i % self.band.w, i / self.band.w);
+        match self.slot[self.block_of(x, y)] {
+            UNOPENED => 0,
+            s => self.mag_in(s as usize, x, y),
+        }
+    }
+
+    /// The magnitude bits of coefficient (x, y), whose block has state `s`.
+    #[inline(always)]
+    fn mag_in(&self, s: usize, x: usize, y: usize) -> u32 {
         let high = if self.high.is_empty() {
             0
         } else {
-            self.high[i]
+            self.high[y * self.band.w + x]
         };
-        self.low[i] as u32 | (high as u32) << 16
+        self.blocks[s].low[local(x, y)] as u32 | (high as u32) << 16
     }
 
     #[inline(always)]
-    fn set_mag(&mut self, i: usize, m: u32) {
-        self.low[i] = m as u16;
+    fn set_mag(&mut self, s: usize, x: usize, y: usize, m: u32) {
+        self.blocks[s].low[local(x, y)] = m as u16;
         if m >> 16 != 0 || !self.high.is_empty() {
             if self.high.is_empty() {
-                self.high = written_zeros(self.low.len());
+                self.high = written_zeros(self.band.len());
             }
-            self.high[i] = (m >> 16) as u16;
+            self.high[y * self.band.w + x] = (m >> 16) as u16;
         }
     }
 
     /// The value a decoder reconstructs for coefficient (x, y).
     #[inline]
     pub(crate) fn value(&self, x: usize, y: usize) -> i32 {
-        let f = self.flags[self.fi(x, y)];
-        Self::value_of(f, self.mag(y * self.band.w + x), self.current)
+        match self.slot[self.block_of(x, y)] {
+            UNOPENED => 0,
+            s => {
+                let s = s as usize;
+                Self::value_of(self.flags(s, x, y), self.mag_in(s, x, y), self.current)
+            }
+        }
     }
 
     /// Row `y`'s reconstructed values into `out` (the band's width): added to it (wrapping)
@@ -251,64 +346,70 @@ impl BandState {
 
     fn row_values_with<const ADD: bool>(&self, y: usize, out: &mut [i32]) {
         let put = |o: &mut i32, v: i32| *o = if ADD { o.wrapping_add(v) } else { v };
-        if self.flags.is_empty() {
-            // Never coded: zeros.
-            return out.iter_mut().for_each(|o| put(o, 0));
-        }
         let w = self.band.w;
-        let flags = &self.flags[self.fi(0, y)..self.fi(0, y) + w];
-        let low = &self.low[y * w..(y + 1) * w];
-        if self.high.is_empty() {
-            for ((o, &f), &m) in out.iter_mut().zip(flags).zip(low) {
-                put(o, Self::value_of(f, m as u32, self.current));
+        let ly = (y % BLOCK) * BLOCK;
+        for (bx, out) in out[..w].chunks_mut(BLOCK).enumerate() {
+            let s = self.slot[(y / BLOCK) * self.bw + bx];
+            if s == UNOPENED {
+                if !ADD {
+                    out.fill(0);
+                }
+                continue;
             }
-        } else {
-            let high = &self.high[y * w..(y + 1) * w];
-            for (((o, &f), &m), &h) in out.iter_mut().zip(flags).zip(low).zip(high) {
-                put(
-                    o,
-                    Self::value_of(f, m as u32 | (h as u32) << 16, self.current),
-                );
+            let b = &self.blocks[s as usize];
+            let flags = &b.flags[ly..ly + out.len()];
+            let low = &b.low[ly..ly + out.len()];
+            if self.high.is_empty() {
+                for ((o, &f), &m) in out.iter_mut().zip(flags).zip(low) {
+                    put(o, Self::value_of(f, m as u32, self.current));
+                }
+            } else {
+                let x0 = y * w + bx * BLOCK;
+                let high = &self.high[x0..x0 + out.len()];
+                for (((o, &f), &m), &h) in out.iter_mut().zip(flags).zip(low).zip(high) {
+                    put(
+                        o,
+                        Self::value_of(f, m as u32 | (h as u32) << 16, self.current),
+                    );
+                }
             }
         }
     }
 
-    /// The significance of the 8 neighbours, as N_LEFT, N_RIGHT, N_UP, N_DOWN and four
-    /// diagonal bits.
-    #[inline(always)]
-    fn pattern(&self, fi: usize) -> u8 {
-        (self.flags[fi] >> NEIGHBOURS) as u8
+    /// The significance of the 8 neighbours of (x, y), as N_LEFT, N_RIGHT, N_UP, N_DOWN and
+    /// four diagonal bits, from their flags.
+    fn pattern_at(&self, x: usize, y: usize) -> u8 {
+        TELLS.iter().fold(0, |n, &(dx, dy, bit)| {
+            // The neighbour at (x − dx, y − dy) sees (x, y) at `bit`; so (x, y) sees it at
+            // the bit for (dx, dy)'s opposite: the bit (x − dx, y − dy) would tell.
+            let sig = self.flags_near(x, y, -dx, -dy) & SIG != 0;
+            n | if sig { bit } else { 0 }
+        })
     }
 
-    /// [`BandState::pattern`] from the neighbours' flags.
-    fn pattern_of_neighbours(&self, fi: usize) -> u8 {
-        let f = &self.flags;
-        let pw = self.pw;
-        let s = |i: usize| (f[i] & SIG) as u8;
-        s(fi - 1)
-            | s(fi + 1) << 1
-            | s(fi - pw) << 2
-            | s(fi + pw) << 3
-            | s(fi - pw - 1) << 4
-            | s(fi - pw + 1) << 5
-            | s(fi + pw - 1) << 6
-            | s(fi + pw + 1) << 7
-    }
-
-    /// Marks coefficient `fi`, just made significant, in its neighbours' patterns.
+    /// Marks coefficient (x, y) of block state `s`, just made significant, in its
+    /// neighbours' patterns (those in blocks with no state learn it when they get one).
     #[inline(always)]
-    fn tell_neighbours(&mut self, fi: usize) {
-        let pw = self.pw;
-        let f = &mut self.flags;
-        // For the neighbour on the right, this coefficient is on its left; and so on.
-        f[fi + 1] |= (N_LEFT as Flags) << NEIGHBOURS;
-        f[fi - 1] |= (N_RIGHT as Flags) << NEIGHBOURS;
-        f[fi + pw] |= (N_UP as Flags) << NEIGHBOURS;
-        f[fi - pw] |= (N_DOWN as Flags) << NEIGHBOURS;
-        f[fi + pw + 1] |= 0x10 << NEIGHBOURS;
-        f[fi + pw - 1] |= 0x20 << NEIGHBOURS;
-        f[fi - pw + 1] |= 0x40 << NEIGHBOURS;
-        f[fi - pw - 1] |= 0x80 << NEIGHBOURS;
+    fn tell_neighbours(&mut self, s: usize, x: usize, y: usize) {
+        let (lx, ly) = (x % BLOCK, y % BLOCK);
+        if (1..BLOCK - 1).contains(&lx) && (1..BLOCK - 1).contains(&ly) {
+            // Within the block (cells past the band's edge are never coded).
+            let f = &mut self.blocks[s].flags;
+            let li = local(x, y) as isize;
+            for &(dx, dy, bit) in &TELLS {
+                f[(li + dy * BLOCK as isize + dx) as usize] |= (bit as Flags) << NEIGHBOURS;
+            }
+            return;
+        }
+        for &(dx, dy, bit) in &TELLS {
+            let (nx, ny) = (x.wrapping_add_signed(dx), y.wrapping_add_signed(dy));
+            if nx < self.band.w && ny < self.band.h {
+                let n = self.slot[self.block_of(nx, ny)];
+                if n != UNOPENED {
+                    self.blocks[n as usize].flags[local(nx, ny)] |= (bit as Flags) << NEIGHBOURS;
+                }
+            }
+        }
     }
 
     /// Makes the neighbour patterns of the band's coefficients within one of `(x, y)` agree
@@ -316,18 +417,22 @@ impl BandState {
     fn recount_neighbours(&mut self, x: usize, y: usize) {
         for yy in y.saturating_sub(1)..(y + 2).min(self.band.h) {
             for xx in x.saturating_sub(1)..(x + 2).min(self.band.w) {
-                let fi = self.fi(xx, yy);
-                let n = self.pattern_of_neighbours(fi) as Flags;
-                self.flags[fi] = (self.flags[fi] & 0xff) | n << NEIGHBOURS;
+                let s = self.slot[self.block_of(xx, yy)];
+                if s != UNOPENED {
+                    let n = self.pattern_at(xx, yy) as Flags;
+                    let f = self.flags_mut(s as usize, xx, yy);
+                    *f = (*f & 0xff) | n << NEIGHBOURS;
+                }
             }
         }
     }
 
+    /// The sign context of coefficient (x, y) from its horizontal and vertical neighbours,
+    /// and whether the sign is coded flipped.
     #[inline(always)]
-    fn sign_context(&self, fi: usize) -> (usize, bool) {
-        let f = &self.flags;
-        let c = |i: usize| -> i32 {
-            let v = f[i];
+    fn sign_context(&self, x: usize, y: usize) -> (usize, bool) {
+        let c = |dx: isize, dy: isize| -> i32 {
+            let v = self.flags_near(x, y, dx, dy);
             if v & SIG == 0 {
                 0
             } else if v & NEG != 0 {
@@ -336,8 +441,8 @@ impl BandState {
                 1
             }
         };
-        let hc = (c(fi - 1) + c(fi + 1)).clamp(-1, 1);
-        let vc = (c(fi - self.pw) + c(fi + self.pw)).clamp(-1, 1);
+        let hc = (c(-1, 0) + c(1, 0)).clamp(-1, 1);
+        let vc = (c(0, -1) + c(0, 1)).clamp(-1, 1);
         match (hc, vc) {
             (1, 1) => (4, false),
             (1, 0) => (3, false),
@@ -525,6 +630,7 @@ pub(crate) struct StreamState {
 /// What a unit changed, to undo it.
 #[derive(Default)]
 struct Undo {
+    /// (x, y, flags, magnitude) of each coefficient of the unit, as they were.
     coefficients: Vec<(usize, usize, Flags, u32)>,
     block: Option<(usize, bool)>,
     band_active: bool,
@@ -604,9 +710,6 @@ impl StreamState {
         pass_done: &mut dyn FnMut(&mut S, &mut T, usize),
     ) {
         let mut undo = Undo::default();
-        if self.cursor.pass < limit.min(self.passes.len()) {
-            self.bands.iter_mut().for_each(BandState::allocate);
-        }
         while self.cursor.pass < limit.min(self.passes.len()) {
             let mode = sym.begin_unit();
             // Only a journalled unit can run out of bytes and be rolled back.
@@ -636,12 +739,13 @@ impl StreamState {
                     let saved_cursor = saved_cursor.expect("only a journalled unit runs out");
                     sym.rollback(&mut self.probs);
                     let b = &mut self.bands[self.targets[saved_cursor.pass]];
-                    for &(fi, i, f, m) in undo.coefficients.iter().rev() {
-                        b.flags[fi] = f;
-                        b.set_mag(i, m);
+                    for &(x, y, f, m) in undo.coefficients.iter().rev() {
+                        let s = b.slot[b.block_of(x, y)] as usize;
+                        *b.flags_mut(s, x, y) = f;
+                        b.set_mag(s, x, y, m);
                     }
-                    for &(_, i, _, _) in &undo.coefficients {
-                        b.recount_neighbours(i % b.band.w, i / b.band.w);
+                    for &(x, y, _, _) in &undo.coefficients {
+                        b.recount_neighbours(x, y);
                     }
                     if let Some((blk, a)) = undo.block {
                         b.block_active[blk] = a;
@@ -715,21 +819,22 @@ impl StreamState {
         if let Some(u) = undo.as_deref_mut() {
             u.block = Some((blk, band.block_active[blk]));
         }
+        let s = band.open(blk);
         let (mut stripe, mut x) = (cur.column / cols, x0 + cur.column % cols);
         loop {
             let ys = y0 + 4 * stripe;
             let ye = (ys + 4).min(y0 + rows);
             if let Some(u) = undo.as_deref_mut() {
                 for y in ys..ye {
-                    let fi = band.fi(x, y);
-                    let i = y * band.band.w + x;
-                    u.coefficients.push((fi, i, band.flags[fi], band.mag(i)));
+                    u.coefficients
+                        .push((x, y, band.flags(s, x, y), band.mag_in(s, x, y)));
                 }
             }
+            let col = Column { s, x, ys, ye };
             match pass.kind {
-                PassKind::Propagation => propagate(band, sym, probs, tally, set, x, ys, ye, p)?,
-                PassKind::Refinement => refine(band, sym, probs, tally, set, x, ys, ye, p)?,
-                PassKind::Cleanup => clean(band, sym, probs, tally, set, x, ys, ye, p)?,
+                PassKind::Propagation => propagate(band, sym, probs, tally, set, col, p)?,
+                PassKind::Refinement => refine(band, sym, probs, tally, set, col, p)?,
+                PassKind::Cleanup => clean(band, sym, probs, tally, set, col, p)?,
             }
             cur.column += 1;
             if cur.column == columns {
@@ -768,8 +873,16 @@ fn parity(p: u32) -> Flags {
     }
 }
 
-/// A propagation pass over the stripe column x, rows ys..ye.
-#[allow(clippy::too_many_arguments)]
+/// A stripe column being coded: column `x`, rows `ys..ye`, of the block with state `s`.
+#[derive(Clone, Copy)]
+struct Column {
+    s: usize,
+    x: usize,
+    ys: usize,
+    ye: usize,
+}
+
+/// A propagation pass over a stripe column.
 #[inline(always)]
 fn propagate<S: Symbols, T: Tally>(
     band: &mut BandState,
@@ -777,29 +890,25 @@ fn propagate<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    x: usize,
-    ys: usize,
-    ye: usize,
+    Column { s, x, ys, ye }: Column,
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
     for y in ys..ye {
-        let fi = band.fi(x, y);
-        let f = band.flags[fi];
+        let f = band.flags(s, x, y);
         if f & SIG == 0 {
             let n = (f >> NEIGHBOURS) as u8;
             if n != 0 {
                 let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n as usize] as usize;
-                code_significance(band, sym, probs, tally, x, y, p, ctx, set)?;
-                band.flags[fi] |= VISITED;
+                code_significance(band, sym, probs, tally, (s, x, y), p, ctx, set)?;
+                *band.flags_mut(s, x, y) |= VISITED;
             }
         }
     }
     Some(())
 }
 
-/// A refinement pass over the stripe column x, rows ys..ye.
-#[allow(clippy::too_many_arguments)]
+/// A refinement pass over a stripe column.
 #[inline(always)]
 fn refine<S: Symbols, T: Tally>(
     band: &mut BandState,
@@ -807,30 +916,27 @@ fn refine<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    x: usize,
-    ys: usize,
-    ye: usize,
+    Column { s, x, ys, ye }: Column,
     p: u32,
 ) -> Option<()> {
     for y in ys..ye {
-        let fi = band.fi(x, y);
-        let f = band.flags[fi];
+        let f = band.flags(s, x, y);
         if f & (SIG | VISITED) == SIG {
             let ctx = if f & REFINED != 0 {
                 2
             } else {
-                (band.pattern(fi) != 0) as usize
+                (f >> NEIGHBOURS != 0) as usize
             };
             let i = y * band.band.w + x;
             let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
             let before = if T::COUNTS { band.value(x, y) } else { 0 };
             let bit = sym.code(probs, set + CTX_REF + ctx, truth)?;
             if p < 16 {
-                band.low[i] |= (bit as u16) << p;
+                band.blocks[s].low[local(x, y)] |= (bit as u16) << p;
             } else {
-                band.set_mag(i, band.mag(i) | (bit as u32) << p);
+                band.set_mag(s, x, y, band.mag_in(s, x, y) | (bit as u32) << p);
             }
-            band.flags[fi] = (f & !ODD) | REFINED | parity(p);
+            *band.flags_mut(s, x, y) = (f & !ODD) | REFINED | parity(p);
             if T::COUNTS {
                 let t = band.truth[i] as i64;
                 tally.gain(t - before as i64, t - band.value(x, y) as i64);
@@ -840,8 +946,7 @@ fn refine<S: Symbols, T: Tally>(
     Some(())
 }
 
-/// A cleanup pass over the stripe column x, rows ys..ye (then they are no longer visited).
-#[allow(clippy::too_many_arguments)]
+/// A cleanup pass over a stripe column (then its coefficients are no longer visited).
 #[inline(always)]
 fn clean<S: Symbols, T: Tally>(
     band: &mut BandState,
@@ -849,9 +954,7 @@ fn clean<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    x: usize,
-    ys: usize,
-    ye: usize,
+    Column { s, x, ys, ye }: Column,
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
@@ -859,10 +962,9 @@ fn clean<S: Symbols, T: Tally>(
     if ye - ys == 4 {
         // No coefficient significant, visited or with a significant neighbour.
         const BUSY: Flags = SIG | VISITED | 0xff << NEIGHBOURS;
-        let fi = band.fi(x, ys);
-        let pw = band.pw;
-        let f = &band.flags;
-        let quiet = (f[fi] | f[fi + pw] | f[fi + 2 * pw] | f[fi + 3 * pw]) & BUSY == 0;
+        let f = &band.blocks[s].flags;
+        let li = local(x, ys);
+        let quiet = (f[li] | f[li + BLOCK] | f[li + 2 * BLOCK] | f[li + 3 * BLOCK]) & BUSY == 0;
         if quiet {
             let first = if S::ENCODES {
                 (ys..ye).position(|yy| {
@@ -877,12 +979,11 @@ fn clean<S: Symbols, T: Tally>(
                 let hi = sym.code(probs, set + CTX_UNI, k & 2 != 0)?;
                 let lo = sym.code(probs, set + CTX_UNI + 1, k & 1 != 0)?;
                 let yy = ys + 2 * hi as usize + lo as usize;
-                let fi = band.fi(x, yy);
-                let (sc, flip) = band.sign_context(fi);
+                let (sc, flip) = band.sign_context(x, yy);
                 let i = yy * band.band.w + x;
                 let neg_truth = S::ENCODES && band.truth[i] < 0;
                 let neg = sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
-                make_significant(band, tally, x, yy, p, neg);
+                make_significant(band, tally, (s, x, yy), p, neg);
                 y = yy + 1;
             } else {
                 y = ye;
@@ -890,22 +991,22 @@ fn clean<S: Symbols, T: Tally>(
         }
     }
     while y < ye {
-        let fi = band.fi(x, y);
-        if band.flags[fi] & (SIG | VISITED) == 0 {
-            let ctx = set + CTX_SIG + SIG_CONTEXT[orient][band.pattern(fi) as usize] as usize;
-            code_significance(band, sym, probs, tally, x, y, p, ctx, set)?;
+        let f = band.flags(s, x, y);
+        if f & (SIG | VISITED) == 0 {
+            let n = (f >> NEIGHBOURS) as usize;
+            let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n] as usize;
+            code_significance(band, sym, probs, tally, (s, x, y), p, ctx, set)?;
         }
         y += 1;
     }
     for yy in ys..ye {
-        let fi = band.fi(x, yy);
-        band.flags[fi] &= !VISITED;
+        *band.flags_mut(s, x, yy) &= !VISITED;
     }
     Some(())
 }
 
-/// Codes whether coefficient (x, y), insignificant so far, is significant at bit-plane `p`,
-/// and if so its sign.
+/// Codes whether coefficient (x, y) of block state `s`, insignificant so far, is
+/// significant at bit-plane `p`, and if so its sign.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn code_significance<S: Symbols, T: Tally>(
@@ -913,8 +1014,7 @@ fn code_significance<S: Symbols, T: Tally>(
     sym: &mut S,
     probs: &mut [Prob],
     tally: &mut T,
-    x: usize,
-    y: usize,
+    (s, x, y): (usize, usize, usize),
     p: u32,
     ctx: usize,
     set: usize,
@@ -922,11 +1022,10 @@ fn code_significance<S: Symbols, T: Tally>(
     let i = y * band.band.w + x;
     let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
     if sym.code(probs, ctx, truth)? {
-        let fi = band.fi(x, y);
-        let (sc, flip) = band.sign_context(fi);
+        let (sc, flip) = band.sign_context(x, y);
         let neg_truth = S::ENCODES && band.truth[i] < 0;
         let neg = sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
-        make_significant(band, tally, x, y, p, neg);
+        make_significant(band, tally, (s, x, y), p, neg);
     }
     Some(())
 }
@@ -935,21 +1034,19 @@ fn code_significance<S: Symbols, T: Tally>(
 fn make_significant<T: Tally>(
     band: &mut BandState,
     tally: &mut T,
-    x: usize,
-    y: usize,
+    (s, x, y): (usize, usize, usize),
     p: u32,
     neg: bool,
 ) {
-    let fi = band.fi(x, y);
-    let i = y * band.band.w + x;
-    band.flags[fi] = (band.flags[fi] & !ODD) | SIG | if neg { NEG } else { 0 } | parity(p);
-    band.tell_neighbours(fi);
-    band.set_mag(i, 1 << p);
-    let (bw, _) = band.band.blocks();
-    band.block_active[(y / BLOCK) * bw + x / BLOCK] = true;
+    let f = band.flags_mut(s, x, y);
+    *f = (*f & !ODD) | SIG | if neg { NEG } else { 0 } | parity(p);
+    band.tell_neighbours(s, x, y);
+    band.set_mag(s, x, y, 1 << p);
+    let blk = band.block_of(x, y);
+    band.block_active[blk] = true;
     band.band_active = true;
     if T::COUNTS {
-        let t = band.truth[i] as i64;
+        let t = band.truth[y * band.band.w + x] as i64;
         tally.gain(t, t - band.value(x, y) as i64);
     }
 }
@@ -961,7 +1058,7 @@ fn block_has_new(band: &BandState, bx: u32, by: u32, p: u32) -> bool {
     (y0..(y0 + BLOCK).min(band.band.h)).any(|y| {
         (x0..(x0 + BLOCK).min(band.band.w)).any(|x| {
             let i = y * band.band.w + x;
-            band.flags[band.fi(x, y)] & SIG == 0 && (band.truth[i].unsigned_abs() >> p) & 1 != 0
+            band.flags_near(x, y, 0, 0) & SIG == 0 && (band.truth[i].unsigned_abs() >> p) & 1 != 0
         })
     })
 }
