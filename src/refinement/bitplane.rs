@@ -131,14 +131,10 @@ const fn sig_context(orient: Orient, h: u32, v: u32, d: u32) -> usize {
     }
 }
 
-/// The state of one block's coefficients, row-major with rows of [`BLOCK`] (a block at the
-/// band's right or bottom edge uses the top-left part; the rest is never coded).
-#[derive(Clone, Debug)]
-struct Block {
-    flags: [Flags; BLOCK * BLOCK],
-    /// The magnitude bits known so far, below 2^16.
-    low: [u16; BLOCK * BLOCK],
-}
+/// Coefficients in a block: a block's state is this many flags and magnitudes, row-major
+/// with rows of [`BLOCK`] (a block at the band's right or bottom edge uses the top-left part;
+/// the rest is never coded).
+const AREA: usize = BLOCK * BLOCK;
 
 /// No block state (see [`BandState::slot`]).
 const UNOPENED: u32 = u32::MAX;
@@ -174,9 +170,11 @@ pub(crate) struct BandState {
     pub class: ChannelClass,
     /// Blocks across.
     bw: usize,
-    /// Per block (row-major), the index of its state in `blocks`, or [`UNOPENED`].
+    /// Per block (row-major), the index `s` of its state, or [`UNOPENED`]: its coefficients'
+    /// flags are `flags[s · AREA..]`, and their magnitude bits below 2^16 `low[s · AREA..]`.
     slot: Vec<u32>,
-    blocks: Vec<Block>,
+    flags: Vec<Flags>,
+    low: Vec<u16>,
     /// The magnitude bits from 2^16 up, row-major over the band (empty until the first).
     high: Vec<u16>,
     /// The bit-plane of the band's latest pass.
@@ -198,7 +196,8 @@ impl BandState {
             class,
             bw,
             slot: vec![UNOPENED; bw * bh],
-            blocks: Vec::new(),
+            flags: Vec::new(),
+            low: Vec::new(),
             high: Vec::new(),
             current: 0,
             block_active: vec![false; bw * bh],
@@ -221,20 +220,40 @@ impl BandState {
         if self.slot[blk] != UNOPENED {
             return self.slot[blk] as usize;
         }
-        let s = self.blocks.len();
-        self.blocks.push(Block {
-            flags: [0; BLOCK * BLOCK],
-            low: [0; BLOCK * BLOCK],
-        });
+        let s = self.flags.len() / AREA;
+        self.flags.resize((s + 1) * AREA, 0);
+        self.low.resize((s + 1) * AREA, 0);
         self.slot[blk] = s as u32;
-        let (x0, y0) = ((blk % self.bw) * BLOCK, (blk / self.bw) * BLOCK);
-        let cols = BLOCK.min(self.band.w - x0);
-        let rows = BLOCK.min(self.band.h - y0);
-        for y in y0..y0 + rows {
-            for x in x0..x0 + cols {
-                if x == x0 || y == y0 || x + 1 == x0 + cols || y + 1 == y0 + rows {
-                    self.blocks[s].flags[local(x, y)] =
-                        (self.pattern_at(x, y) as Flags) << NEIGHBOURS;
+        // Inside the block no coefficient is significant yet: only those on its edges can
+        // have significant neighbours, just outside it in the opened blocks around it.
+        let (bx, by) = (blk % self.bw, blk / self.bw);
+        let (bw, bh) = self.band.blocks();
+        let opened =
+            |xx: usize, yy: usize| (xx, yy) != (bx, by) && self.slot[yy * bw + xx] != UNOPENED;
+        let ys = by.saturating_sub(1)..(by + 2).min(bh);
+        if !ys
+            .into_iter()
+            .any(|yy| (bx.saturating_sub(1)..(bx + 2).min(bw)).any(|xx| opened(xx, yy)))
+        {
+            return s;
+        }
+        let (x0, y0) = ((bx * BLOCK) as isize, (by * BLOCK) as isize);
+        let x1 = (x0 + BLOCK as isize).min(self.band.w as isize);
+        let y1 = (y0 + BLOCK as isize).min(self.band.h as isize);
+        let inside = |x: isize, y: isize| (x0..x1).contains(&x) && (y0..y1).contains(&y);
+        // The ring around the block: its rows above and below, and its columns to the left
+        // and right.
+        let across = (x0 - 1..=x1).flat_map(|x| [(x, y0 - 1), (x, y1)]);
+        let down = (y0..y1).flat_map(|y| [(x0 - 1, y), (x1, y)]);
+        for (nx, ny) in across.chain(down) {
+            if self.flags_near(0, 0, nx, ny) & SIG == 0 {
+                continue;
+            }
+            for &(dx, dy, bit) in &TELLS {
+                let (x, y) = (nx + dx, ny + dy);
+                if inside(x, y) {
+                    self.flags[s * AREA + local(x as usize, y as usize)] |=
+                        (bit as Flags) << NEIGHBOURS;
                 }
             }
         }
@@ -251,19 +270,19 @@ impl BandState {
         }
         match self.slot[self.block_of(nx, ny)] {
             UNOPENED => 0,
-            s => self.blocks[s as usize].flags[local(nx, ny)],
+            s => self.flags[s as usize * AREA + local(nx, ny)],
         }
     }
 
     /// The flags of coefficient (x, y), whose block has state `s`.
     #[inline(always)]
     fn flags(&self, s: usize, x: usize, y: usize) -> Flags {
-        self.blocks[s].flags[local(x, y)]
+        self.flags[s * AREA + local(x, y)]
     }
 
     #[inline(always)]
     fn flags_mut(&mut self, s: usize, x: usize, y: usize) -> &mut Flags {
-        &mut self.blocks[s].flags[local(x, y)]
+        &mut self.flags[s * AREA + local(x, y)]
     }
 
     /// The reconstruction of a coefficient from its flags and magnitude bits, the band's
@@ -308,12 +327,12 @@ impl BandState {
         } else {
             self.high[y * self.band.w + x]
         };
-        self.blocks[s].low[local(x, y)] as u32 | (high as u32) << 16
+        self.low[s * AREA + local(x, y)] as u32 | (high as u32) << 16
     }
 
     #[inline(always)]
     fn set_mag(&mut self, s: usize, x: usize, y: usize, m: u32) {
-        self.blocks[s].low[local(x, y)] = m as u16;
+        self.low[s * AREA + local(x, y)] = m as u16;
         if m >> 16 != 0 || !self.high.is_empty() {
             if self.high.is_empty() {
                 self.high = written_zeros(self.band.len());
@@ -356,9 +375,9 @@ impl BandState {
                 }
                 continue;
             }
-            let b = &self.blocks[s as usize];
-            let flags = &b.flags[ly..ly + out.len()];
-            let low = &b.low[ly..ly + out.len()];
+            let at = s as usize * AREA + ly;
+            let flags = &self.flags[at..at + out.len()];
+            let low = &self.low[at..at + out.len()];
             if self.high.is_empty() {
                 for ((o, &f), &m) in out.iter_mut().zip(flags).zip(low) {
                     put(o, Self::value_of(f, m as u32, self.current));
@@ -380,8 +399,7 @@ impl BandState {
     /// four diagonal bits, from their flags.
     fn pattern_at(&self, x: usize, y: usize) -> u8 {
         TELLS.iter().fold(0, |n, &(dx, dy, bit)| {
-            // The neighbour at (x − dx, y − dy) sees (x, y) at `bit`; so (x, y) sees it at
-            // the bit for (dx, dy)'s opposite: the bit (x − dx, y − dy) would tell.
+            // The neighbour at (x − dx, y − dy), if significant, tells (x, y) `bit`.
             let sig = self.flags_near(x, y, -dx, -dy) & SIG != 0;
             n | if sig { bit } else { 0 }
         })
@@ -394,7 +412,7 @@ impl BandState {
         let (lx, ly) = (x % BLOCK, y % BLOCK);
         if (1..BLOCK - 1).contains(&lx) && (1..BLOCK - 1).contains(&ly) {
             // Within the block (cells past the band's edge are never coded).
-            let f = &mut self.blocks[s].flags;
+            let f = &mut self.flags[s * AREA..(s + 1) * AREA];
             let li = local(x, y) as isize;
             for &(dx, dy, bit) in &TELLS {
                 f[(li + dy * BLOCK as isize + dx) as usize] |= (bit as Flags) << NEIGHBOURS;
@@ -406,7 +424,7 @@ impl BandState {
             if nx < self.band.w && ny < self.band.h {
                 let n = self.slot[self.block_of(nx, ny)];
                 if n != UNOPENED {
-                    self.blocks[n as usize].flags[local(nx, ny)] |= (bit as Flags) << NEIGHBOURS;
+                    self.flags[n as usize * AREA + local(nx, ny)] |= (bit as Flags) << NEIGHBOURS;
                 }
             }
         }
@@ -430,9 +448,18 @@ impl BandState {
     /// The sign context of coefficient (x, y) from its horizontal and vertical neighbours,
     /// and whether the sign is coded flipped.
     #[inline(always)]
-    fn sign_context(&self, x: usize, y: usize) -> (usize, bool) {
+    fn sign_context(&self, s: usize, x: usize, y: usize) -> (usize, bool) {
+        let (lx, ly) = (x % BLOCK, y % BLOCK);
+        let within = (1..BLOCK - 1).contains(&lx) && (1..BLOCK - 1).contains(&ly);
+        let f = &self.flags[s * AREA..(s + 1) * AREA];
+        let li = local(x, y) as isize;
         let c = |dx: isize, dy: isize| -> i32 {
-            let v = self.flags_near(x, y, dx, dy);
+            let v = if within {
+                // Cells past the band's edge are never significant.
+                f[(li + dy * BLOCK as isize + dx) as usize]
+            } else {
+                self.flags_near(x, y, dx, dy)
+            };
             if v & SIG == 0 {
                 0
             } else if v & NEG != 0 {
@@ -894,14 +921,16 @@ fn propagate<S: Symbols, T: Tally>(
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
+    let l0 = local(x, ys);
     for y in ys..ye {
-        let f = band.flags(s, x, y);
+        let li = l0 + (y - ys) * BLOCK;
+        let f = band.flags[s * AREA + li];
         if f & SIG == 0 {
             let n = (f >> NEIGHBOURS) as u8;
             if n != 0 {
                 let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n as usize] as usize;
                 code_significance(band, sym, probs, tally, (s, x, y), p, ctx, set)?;
-                *band.flags_mut(s, x, y) |= VISITED;
+                band.flags[s * AREA + li] |= VISITED;
             }
         }
     }
@@ -919,8 +948,10 @@ fn refine<S: Symbols, T: Tally>(
     Column { s, x, ys, ye }: Column,
     p: u32,
 ) -> Option<()> {
+    let l0 = local(x, ys);
     for y in ys..ye {
-        let f = band.flags(s, x, y);
+        let li = l0 + (y - ys) * BLOCK;
+        let f = band.flags[s * AREA + li];
         if f & (SIG | VISITED) == SIG {
             let ctx = if f & REFINED != 0 {
                 2
@@ -932,11 +963,11 @@ fn refine<S: Symbols, T: Tally>(
             let before = if T::COUNTS { band.value(x, y) } else { 0 };
             let bit = sym.code(probs, set + CTX_REF + ctx, truth)?;
             if p < 16 {
-                band.blocks[s].low[local(x, y)] |= (bit as u16) << p;
+                band.low[s * AREA + li] |= (bit as u16) << p;
             } else {
                 band.set_mag(s, x, y, band.mag_in(s, x, y) | (bit as u32) << p);
             }
-            *band.flags_mut(s, x, y) = (f & !ODD) | REFINED | parity(p);
+            band.flags[s * AREA + li] = (f & !ODD) | REFINED | parity(p);
             if T::COUNTS {
                 let t = band.truth[i] as i64;
                 tally.gain(t - before as i64, t - band.value(x, y) as i64);
@@ -958,13 +989,13 @@ fn clean<S: Symbols, T: Tally>(
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
+    let l0 = local(x, ys);
     let mut y = ys;
     if ye - ys == 4 {
         // No coefficient significant, visited or with a significant neighbour.
         const BUSY: Flags = SIG | VISITED | 0xff << NEIGHBOURS;
-        let f = &band.blocks[s].flags;
-        let li = local(x, ys);
-        let quiet = (f[li] | f[li + BLOCK] | f[li + 2 * BLOCK] | f[li + 3 * BLOCK]) & BUSY == 0;
+        let f = &band.flags[s * AREA..(s + 1) * AREA];
+        let quiet = (f[l0] | f[l0 + BLOCK] | f[l0 + 2 * BLOCK] | f[l0 + 3 * BLOCK]) & BUSY == 0;
         if quiet {
             let first = if S::ENCODES {
                 (ys..ye).position(|yy| {
@@ -979,7 +1010,7 @@ fn clean<S: Symbols, T: Tally>(
                 let hi = sym.code(probs, set + CTX_UNI, k & 2 != 0)?;
                 let lo = sym.code(probs, set + CTX_UNI + 1, k & 1 != 0)?;
                 let yy = ys + 2 * hi as usize + lo as usize;
-                let (sc, flip) = band.sign_context(x, yy);
+                let (sc, flip) = band.sign_context(s, x, yy);
                 let i = yy * band.band.w + x;
                 let neg_truth = S::ENCODES && band.truth[i] < 0;
                 let neg = sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
@@ -991,7 +1022,7 @@ fn clean<S: Symbols, T: Tally>(
         }
     }
     while y < ye {
-        let f = band.flags(s, x, y);
+        let f = band.flags[s * AREA + l0 + (y - ys) * BLOCK];
         if f & (SIG | VISITED) == 0 {
             let n = (f >> NEIGHBOURS) as usize;
             let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n] as usize;
@@ -999,8 +1030,8 @@ fn clean<S: Symbols, T: Tally>(
         }
         y += 1;
     }
-    for yy in ys..ye {
-        *band.flags_mut(s, x, yy) &= !VISITED;
+    for k in 0..ye - ys {
+        band.flags[s * AREA + l0 + k * BLOCK] &= !VISITED;
     }
     Some(())
 }
@@ -1022,7 +1053,7 @@ fn code_significance<S: Symbols, T: Tally>(
     let i = y * band.band.w + x;
     let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
     if sym.code(probs, ctx, truth)? {
-        let (sc, flip) = band.sign_context(x, y);
+        let (sc, flip) = band.sign_context(s, x, y);
         let neg_truth = S::ENCODES && band.truth[i] < 0;
         let neg = sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
         make_significant(band, tally, (s, x, y), p, neg);
