@@ -191,11 +191,13 @@ fn lift_row_back(kernel: Kernel, t: &mut [i32], out: &mut [i32]) {
     for &(update, step) in steps(kernel).iter().rev() {
         lift_1d(update, step, s, d, -1);
     }
-    for (i, &v) in s.iter().enumerate() {
-        out[2 * i] = v;
+    let (pairs, last) = out.split_at_mut(2 * d.len());
+    for ((o, &a), &b) in pairs.chunks_exact_mut(2).zip(&*s).zip(&*d) {
+        o[0] = a;
+        o[1] = b;
     }
-    for (i, &v) in d.iter().enumerate() {
-        out[2 * i + 1] = v;
+    if let Some(o) = last.first_mut() {
+        *o = s[s.len() - 1];
     }
 }
 
