@@ -523,6 +523,34 @@ fn mixed_or_bad_exact_points_fall_back_without_panic() {
     assert_eq!(bad.render(Method::Gouraud, 20, 20).len(), 400);
 }
 
+#[test]
+fn a_collinear_start_still_gets_the_canonical_cells() {
+    // 70 exact points on one line, then two below it: the first 64 points, which exact
+    // insertion has spade triangulate to start from, give no triangle to insert into, so
+    // insertion gives up and a SampleSet builds the cells from spade's whole triangulation.
+    // The points are above and left of the 8 × 8 image, so none has a mirror point.
+    let frame = qcs::sites::Frame::default_for(8, 8);
+    // ζ⁴ − ζ = −2i·sin 72°: m of it move a point down by 1.9·m lattice units.
+    let down = |m: i64| ZZeta::new([-m, -2 * m, -m, -m]);
+    let mut points: Vec<ZZeta> = (0..70)
+        .map(|k| add(ZZeta::new([-1000 - k, 0, 0, 0]), down(20)))
+        .collect();
+    // Below the line's first two points: an empty rectangle, cocircular, one cell.
+    points.extend((0..2).map(|k| add(ZZeta::new([-1000 - k, 0, 0, 0]), down(30))));
+    let mut set = SampleSet::new(8, 8, 1);
+    for (k, &x) in points.iter().enumerate() {
+        set.try_push_exact(frame.position(x), x, &[k as u8])
+            .expect("an exact point");
+    }
+    assert_eq!(set.points().len(), points.len(), "no mirror point");
+    let lattice = set.point_lattice().to_vec();
+    assert!(Cells::incremental(set.points(), &lattice).is_none());
+    let built = Cells::build(&set.triangulation().clone(), &lattice).expect("spade path");
+    let cells = set.cells().expect("the canonical cells");
+    assert_eq!(canonical(cells, &points), canonical(&built, &points));
+    assert_eq!(cells.histogram(), [0, 0, 0, 68, 1]);
+}
+
 fn psnr(a: &[u8], b: &[u8]) -> f64 {
     let se: f64 = a
         .iter()
