@@ -316,8 +316,10 @@ impl Cells {
     /// and the others are inserted with exact predicates, in rounds of doubling size.
     /// Faster than [`Cells::build`] on progressive sites (`benches/cells.rs`), and the same
     /// cells. `None` if a point has no exact point or is beyond
-    /// [`crate::lattice::EXACT_LIMIT`] (or, defensively, if the insertion finds the mesh
-    /// inconsistent: then [`Cells::build`] is the fallback).
+    /// [`crate::lattice::EXACT_LIMIT`], if the first few points are all collinear and more
+    /// follow (`spade`'s triangulation of them has no triangle to insert into), or,
+    /// defensively, if the insertion finds the mesh inconsistent: in the last two cases
+    /// [`Cells::build`] gives the cells.
     ///
     /// ```
     /// use qcs::reconstruction::{Cells, SampleSet};
@@ -384,8 +386,10 @@ impl LiveCells {
     }
 
     /// For a whole progressive set (sample order, mirror points after their sample): `spade`
-    /// bulk loads the first points, the rest are inserted. `None` if some point is not exact
-    /// (or the insertion gives up: the caller bulk loads them all).
+    /// bulk loads the first points, the rest are inserted. `None` if some point is not exact,
+    /// or if the insertion gives up: when the first [`SEED`] points are all collinear and
+    /// more follow (nothing to insert into), or defensively (the caller then bulk loads them
+    /// all).
     pub(crate) fn grow(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
         let seed = lattice.len().min(SEED);
         let mut mesh = SampleMesh::new();

@@ -528,7 +528,8 @@ impl SampleSet {
                 cells = Cells::atlas(&pts.positions, &pts.lattice);
             }
             if cells.is_none() {
-                // By exact insertion; spade's whole triangulation only if that gives up.
+                // By exact insertion; spade's whole triangulation only if that gives up,
+                // which it does when the first points it starts from are all collinear.
                 self.live = LiveCells::grow(&pts.positions, &pts.lattice).or_else(|| {
                     mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
                     LiveCells::build(&self.mesh, &pts.lattice)
