@@ -342,15 +342,18 @@ impl BandState {
     }
 
     /// The value a decoder reconstructs for coefficient (x, y).
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn value(&self, x: usize, y: usize) -> i32 {
         match self.slot[self.block_of(x, y)] {
             UNOPENED => 0,
-            s => {
-                let s = s as usize;
-                Self::value_of(self.flags(s, x, y), self.mag_in(s, x, y), self.current)
-            }
+            s => self.value_in(s as usize, x, y),
         }
+    }
+
+    /// [`BandState::value`] of coefficient (x, y), whose block has state `s`.
+    #[inline(always)]
+    fn value_in(&self, s: usize, x: usize, y: usize) -> i32 {
+        Self::value_of(self.flags(s, x, y), self.mag_in(s, x, y), self.current)
     }
 
     /// Row `y`'s reconstructed values into `out` (the band's width): added to it (wrapping)
@@ -960,7 +963,7 @@ fn refine<S: Symbols, T: Tally>(
             };
             let i = y * band.band.w + x;
             let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
-            let before = if T::COUNTS { band.value(x, y) } else { 0 };
+            let before = if T::COUNTS { band.value_in(s, x, y) } else { 0 };
             let bit = sym.code(probs, set + CTX_REF + ctx, truth)?;
             if p < 16 {
                 band.low[s * AREA + li] |= (bit as u16) << p;
@@ -970,7 +973,7 @@ fn refine<S: Symbols, T: Tally>(
             band.flags[s * AREA + li] = (f & !ODD) | REFINED | parity(p);
             if T::COUNTS {
                 let t = band.truth[i] as i64;
-                tally.gain(t - before as i64, t - band.value(x, y) as i64);
+                tally.gain(t - before as i64, t - band.value_in(s, x, y) as i64);
             }
         }
     }
@@ -1078,7 +1081,7 @@ fn make_significant<T: Tally>(
     band.band_active = true;
     if T::COUNTS {
         let t = band.truth[y * band.band.w + x] as i64;
-        tally.gain(t, t - band.value(x, y) as i64);
+        tally.gain(t, t - band.value_in(s, x, y) as i64);
     }
 }
 
