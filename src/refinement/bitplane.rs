@@ -131,19 +131,8 @@ const fn sig_context(orient: Orient, h: u32, v: u32, d: u32) -> usize {
     }
 }
 
-/// Coefficients in a block: a block's state is this many flags and magnitudes, row-major
-/// with rows of [`BLOCK`] (a block at the band's right or bottom edge uses the top-left part;
-/// the rest is never coded).
-const AREA: usize = BLOCK * BLOCK;
-
 /// No block state (see [`BandState::slot`]).
 const UNOPENED: u32 = u32::MAX;
-
-/// Where a coefficient is within its block.
-#[inline(always)]
-fn local(x: usize, y: usize) -> usize {
-    (y % BLOCK) * BLOCK + x % BLOCK
-}
 
 /// The 8 neighbours of a coefficient, as (dx, dy) and the bit of the neighbour pattern that
 /// this coefficient is for that neighbour: for the one on the right, it is on the left…
@@ -171,8 +160,14 @@ pub(crate) struct BandState {
     /// Blocks across.
     bw: usize,
     /// Per block (row-major), the index `s` of its state, or [`UNOPENED`]: its coefficients'
-    /// flags are `flags[s · AREA..]`, and their magnitude bits below 2^16 `low[s · AREA..]`.
+    /// flags are `flags[s · area..]`, and their magnitude bits below 2^16 `low[s · area..]`,
+    /// row-major with rows of `stride` (see [`BandState::at`]).
     slot: Vec<u32>,
+    /// A block's row length and size in its state: [`BLOCK`], or less for a band narrower
+    /// or lower than a block (a block at the band's right or bottom edge uses the top-left
+    /// part of its state; the rest is never coded).
+    stride: usize,
+    area: usize,
     flags: Vec<Flags>,
     low: Vec<u16>,
     /// The magnitude bits from 2^16 up, row-major over the band (empty until the first).
@@ -196,6 +191,8 @@ impl BandState {
             class,
             bw,
             slot: vec![UNOPENED; bw * bh],
+            stride: BLOCK.min(band.w),
+            area: BLOCK.min(band.w) * BLOCK.min(band.h),
             flags: Vec::new(),
             low: Vec::new(),
             high: Vec::new(),
@@ -205,6 +202,12 @@ impl BandState {
             order: block_order(&band),
             truth,
         }
+    }
+
+    /// Where coefficient (x, y), of a block with state `s`, is in `flags` and `low`.
+    #[inline(always)]
+    fn at(&self, s: usize, x: usize, y: usize) -> usize {
+        s * self.area + (y % BLOCK) * self.stride + x % BLOCK
     }
 
     /// The block of coefficient (x, y).
@@ -220,9 +223,9 @@ impl BandState {
         if self.slot[blk] != UNOPENED {
             return self.slot[blk] as usize;
         }
-        let s = self.flags.len() / AREA;
-        self.flags.resize((s + 1) * AREA, 0);
-        self.low.resize((s + 1) * AREA, 0);
+        let s = self.flags.len() / self.area;
+        self.flags.resize((s + 1) * self.area, 0);
+        self.low.resize((s + 1) * self.area, 0);
         self.slot[blk] = s as u32;
         // Inside the block no coefficient is significant yet: only those on its edges can
         // have significant neighbours, just outside it in the opened blocks around it.
@@ -252,8 +255,8 @@ impl BandState {
             for &(dx, dy, bit) in &TELLS {
                 let (x, y) = (nx + dx, ny + dy);
                 if inside(x, y) {
-                    self.flags[s * AREA + local(x as usize, y as usize)] |=
-                        (bit as Flags) << NEIGHBOURS;
+                    let i = self.at(s, x as usize, y as usize);
+                    self.flags[i] |= (bit as Flags) << NEIGHBOURS;
                 }
             }
         }
@@ -270,19 +273,27 @@ impl BandState {
         }
         match self.slot[self.block_of(nx, ny)] {
             UNOPENED => 0,
-            s => self.flags[s as usize * AREA + local(nx, ny)],
+            s => self.flags[self.at(s as usize, nx, ny)],
         }
+    }
+
+    /// Whether the 8 neighbours of the coefficient at (lx, ly) in its block are in the
+    /// block's state too (those past the band's edge are never coded, nor significant).
+    #[inline(always)]
+    fn within(&self, lx: usize, ly: usize) -> bool {
+        (1..self.stride - 1).contains(&lx) && (1..self.area / self.stride - 1).contains(&ly)
     }
 
     /// The flags of coefficient (x, y), whose block has state `s`.
     #[inline(always)]
     fn flags(&self, s: usize, x: usize, y: usize) -> Flags {
-        self.flags[s * AREA + local(x, y)]
+        self.flags[self.at(s, x, y)]
     }
 
     #[inline(always)]
     fn flags_mut(&mut self, s: usize, x: usize, y: usize) -> &mut Flags {
-        &mut self.flags[s * AREA + local(x, y)]
+        let i = self.at(s, x, y);
+        &mut self.flags[i]
     }
 
     /// The reconstruction of a coefficient from its flags and magnitude bits, the band's
@@ -327,12 +338,13 @@ impl BandState {
         } else {
             self.high[y * self.band.w + x]
         };
-        self.low[s * AREA + local(x, y)] as u32 | (high as u32) << 16
+        self.low[self.at(s, x, y)] as u32 | (high as u32) << 16
     }
 
     #[inline(always)]
     fn set_mag(&mut self, s: usize, x: usize, y: usize, m: u32) {
-        self.low[s * AREA + local(x, y)] = m as u16;
+        let i = self.at(s, x, y);
+        self.low[i] = m as u16;
         if m >> 16 != 0 || !self.high.is_empty() {
             if self.high.is_empty() {
                 self.high = written_zeros(self.band.len());
@@ -369,7 +381,6 @@ impl BandState {
     fn row_values_with<const ADD: bool>(&self, y: usize, out: &mut [i32]) {
         let put = |o: &mut i32, v: i32| *o = if ADD { o.wrapping_add(v) } else { v };
         let w = self.band.w;
-        let ly = (y % BLOCK) * BLOCK;
         for (bx, out) in out[..w].chunks_mut(BLOCK).enumerate() {
             let s = self.slot[(y / BLOCK) * self.bw + bx];
             if s == UNOPENED {
@@ -378,7 +389,7 @@ impl BandState {
                 }
                 continue;
             }
-            let at = s as usize * AREA + ly;
+            let at = self.at(s as usize, 0, y);
             let flags = &self.flags[at..at + out.len()];
             let low = &self.low[at..at + out.len()];
             if self.high.is_empty() {
@@ -413,12 +424,10 @@ impl BandState {
     #[inline(always)]
     fn tell_neighbours(&mut self, s: usize, x: usize, y: usize) {
         let (lx, ly) = (x % BLOCK, y % BLOCK);
-        if (1..BLOCK - 1).contains(&lx) && (1..BLOCK - 1).contains(&ly) {
-            // Within the block (cells past the band's edge are never coded).
-            let f = &mut self.flags[s * AREA..(s + 1) * AREA];
-            let li = local(x, y) as isize;
+        if self.within(lx, ly) {
+            let (i, stride) = (self.at(s, x, y) as isize, self.stride as isize);
             for &(dx, dy, bit) in &TELLS {
-                f[(li + dy * BLOCK as isize + dx) as usize] |= (bit as Flags) << NEIGHBOURS;
+                self.flags[(i + dy * stride + dx) as usize] |= (bit as Flags) << NEIGHBOURS;
             }
             return;
         }
@@ -427,7 +436,8 @@ impl BandState {
             if nx < self.band.w && ny < self.band.h {
                 let n = self.slot[self.block_of(nx, ny)];
                 if n != UNOPENED {
-                    self.flags[n as usize * AREA + local(nx, ny)] |= (bit as Flags) << NEIGHBOURS;
+                    let i = self.at(n as usize, nx, ny);
+                    self.flags[i] |= (bit as Flags) << NEIGHBOURS;
                 }
             }
         }
@@ -453,13 +463,12 @@ impl BandState {
     #[inline(always)]
     fn sign_context(&self, s: usize, x: usize, y: usize) -> (usize, bool) {
         let (lx, ly) = (x % BLOCK, y % BLOCK);
-        let within = (1..BLOCK - 1).contains(&lx) && (1..BLOCK - 1).contains(&ly);
-        let f = &self.flags[s * AREA..(s + 1) * AREA];
-        let li = local(x, y) as isize;
+        let within = self.within(lx, ly);
+        let (i, stride) = (self.at(s, x, y) as isize, self.stride as isize);
         let c = |dx: isize, dy: isize| -> i32 {
             let v = if within {
                 // Cells past the band's edge are never significant.
-                f[(li + dy * BLOCK as isize + dx) as usize]
+                self.flags[(i + dy * stride + dx) as usize]
             } else {
                 self.flags_near(x, y, dx, dy)
             };
@@ -924,16 +933,16 @@ fn propagate<S: Symbols, T: Tally>(
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
-    let l0 = local(x, ys);
+    let (l0, stride) = (band.at(s, x, ys), band.stride);
     for y in ys..ye {
-        let li = l0 + (y - ys) * BLOCK;
-        let f = band.flags[s * AREA + li];
+        let at = l0 + (y - ys) * stride;
+        let f = band.flags[at];
         if f & SIG == 0 {
             let n = (f >> NEIGHBOURS) as u8;
             if n != 0 {
                 let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n as usize] as usize;
                 code_significance(band, sym, probs, tally, (s, x, y), p, ctx, set)?;
-                band.flags[s * AREA + li] |= VISITED;
+                band.flags[at] |= VISITED;
             }
         }
     }
@@ -951,10 +960,10 @@ fn refine<S: Symbols, T: Tally>(
     Column { s, x, ys, ye }: Column,
     p: u32,
 ) -> Option<()> {
-    let l0 = local(x, ys);
+    let (l0, stride) = (band.at(s, x, ys), band.stride);
     for y in ys..ye {
-        let li = l0 + (y - ys) * BLOCK;
-        let f = band.flags[s * AREA + li];
+        let at = l0 + (y - ys) * stride;
+        let f = band.flags[at];
         if f & (SIG | VISITED) == SIG {
             let ctx = if f & REFINED != 0 {
                 2
@@ -966,11 +975,11 @@ fn refine<S: Symbols, T: Tally>(
             let before = if T::COUNTS { band.value_in(s, x, y) } else { 0 };
             let bit = sym.code(probs, set + CTX_REF + ctx, truth)?;
             if p < 16 {
-                band.low[s * AREA + li] |= (bit as u16) << p;
+                band.low[at] |= (bit as u16) << p;
             } else {
                 band.set_mag(s, x, y, band.mag_in(s, x, y) | (bit as u32) << p);
             }
-            band.flags[s * AREA + li] = (f & !ODD) | REFINED | parity(p);
+            band.flags[at] = (f & !ODD) | REFINED | parity(p);
             if T::COUNTS {
                 let t = band.truth[i] as i64;
                 tally.gain(t - before as i64, t - band.value_in(s, x, y) as i64);
@@ -992,13 +1001,13 @@ fn clean<S: Symbols, T: Tally>(
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
-    let l0 = local(x, ys);
+    let (l0, stride) = (band.at(s, x, ys), band.stride);
     let mut y = ys;
     if ye - ys == 4 {
         // No coefficient significant, visited or with a significant neighbour.
         const BUSY: Flags = SIG | VISITED | 0xff << NEIGHBOURS;
-        let f = &band.flags[s * AREA..(s + 1) * AREA];
-        let quiet = (f[l0] | f[l0 + BLOCK] | f[l0 + 2 * BLOCK] | f[l0 + 3 * BLOCK]) & BUSY == 0;
+        let f = &band.flags;
+        let quiet = (f[l0] | f[l0 + stride] | f[l0 + 2 * stride] | f[l0 + 3 * stride]) & BUSY == 0;
         if quiet {
             let first = if S::ENCODES {
                 (ys..ye).position(|yy| {
@@ -1025,7 +1034,7 @@ fn clean<S: Symbols, T: Tally>(
         }
     }
     while y < ye {
-        let f = band.flags[s * AREA + l0 + (y - ys) * BLOCK];
+        let f = band.flags[l0 + (y - ys) * stride];
         if f & (SIG | VISITED) == 0 {
             let n = (f >> NEIGHBOURS) as usize;
             let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n] as usize;
@@ -1034,7 +1043,7 @@ fn clean<S: Symbols, T: Tally>(
         y += 1;
     }
     for k in 0..ye - ys {
-        band.flags[s * AREA + l0 + k * BLOCK] &= !VISITED;
+        band.flags[l0 + k * stride] &= !VISITED;
     }
     Some(())
 }
@@ -1105,6 +1114,47 @@ fn band_has_new(band: &BandState, p: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Opened blocks hold at most twice a band's coefficients along each side, and exactly
+    /// them when the band is narrower or lower than a block: a thin band of a hostile file
+    /// costs what its coefficients do.
+    #[test]
+    fn block_states_follow_the_band_s_size() {
+        for (w, h) in [
+            (1, 1000),
+            (1000, 1),
+            (31, 31),
+            (32, 32),
+            (33, 33),
+            (40, 70),
+            (100, 7),
+        ] {
+            let band = Band {
+                x0: 0,
+                y0: 0,
+                w,
+                h,
+                orient: Orient::HighHigh,
+                level: 1,
+                stream: 1,
+            };
+            let mut b = BandState::new(band, 0, Vec::new());
+            let (bw, bh) = band.blocks();
+            for blk in 0..bw * bh {
+                b.open(blk);
+            }
+            let (sw, sh) = (if w > BLOCK { 2 } else { 1 }, if h > BLOCK { 2 } else { 1 });
+            assert!(
+                b.flags.len() <= sw * sh * band.len(),
+                "{w}x{h}: {}",
+                b.flags.len()
+            );
+            assert_eq!(b.low.len(), b.flags.len());
+            if w <= BLOCK && h <= BLOCK {
+                assert_eq!(b.flags.len(), band.len());
+            }
+        }
+    }
 
     #[test]
     fn the_context_table_is_jpeg_2000_s() {
