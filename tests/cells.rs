@@ -527,7 +527,8 @@ fn mixed_or_bad_exact_points_fall_back_without_panic() {
 fn a_collinear_start_still_gets_the_canonical_cells() {
     // 70 exact points on one line, then two below it: the first 64 points, which exact
     // insertion has spade triangulate to start from, give no triangle to insert into, so
-    // insertion gives up and a SampleSet builds the cells from spade's whole triangulation.
+    // the start takes more points (128: all of them here). Exact insertion gives the cells
+    // of spade's whole triangulation, and a SampleSet draws them.
     // The points are above and left of the 8 × 8 image, so none has a mirror point.
     let frame = qcs::sites::Frame::default_for(8, 8);
     // ζ⁴ − ζ = −2i·sin 72°: m of it move a point down by 1.9·m lattice units.
@@ -544,11 +545,49 @@ fn a_collinear_start_still_gets_the_canonical_cells() {
     }
     assert_eq!(set.points().len(), points.len(), "no mirror point");
     let lattice = set.point_lattice().to_vec();
-    assert!(Cells::incremental(set.points(), &lattice).is_none());
+    let grown = Cells::incremental(set.points(), &lattice).expect("exact insertion");
     let built = Cells::build(&set.triangulation().clone(), &lattice).expect("spade path");
+    assert_eq!(canonical(&grown, &points), canonical(&built, &points));
+    assert_eq!(grown.hull(), built.hull());
     let cells = set.cells().expect("the canonical cells");
     assert_eq!(canonical(cells, &points), canonical(&built, &points));
     assert_eq!(cells.histogram(), [0, 0, 0, 68, 1]);
+}
+
+#[test]
+fn a_long_collinear_start_then_points_off_the_line() {
+    // 300 exact points on a slanted line (the start of 64 points has to double three times
+    // to reach one off it), then 40 scattered points, some further along the line: exact
+    // insertion gives the cells of spade's whole triangulation.
+    let frame = qcs::sites::Frame::default_for(8, 8);
+    // 1 + ζ⁴ (a step right and down), from far left of the image, like the line above.
+    let step = ZZeta::new([0, -1, -1, -1]);
+    let far = add(
+        ZZeta::new([-3000, 0, 0, 0]),
+        ZZeta::new([-20, -40, -20, -20]),
+    );
+    let on = |m: i64| add(far, mul(ZZeta::new([m, 0, 0, 0]), step));
+    let mut rng = Rng(31);
+    let mut points: Vec<ZZeta> = (0..300).map(|k| on(k * 7 % 300)).collect();
+    for k in 0..40 {
+        points.push(if k % 4 == 0 {
+            on(300 + k)
+        } else {
+            add(on(rng.below(300) as i64), random_point(&mut rng, 12))
+        });
+    }
+    let mut set = SampleSet::new(8, 8, 1);
+    for (k, &x) in points.iter().enumerate() {
+        set.try_push_exact(frame.position(x), x, &[k as u8])
+            .expect("an exact point");
+    }
+    assert_eq!(set.points().len(), points.len(), "no mirror point");
+    let lattice = set.point_lattice().to_vec();
+    let grown = Cells::incremental(set.points(), &lattice).expect("exact insertion");
+    let built = Cells::build(&set.triangulation().clone(), &lattice).expect("spade path");
+    assert!(grown.len() > 40, "{}", grown.len());
+    assert_eq!(canonical(&grown, &points), canonical(&built, &points));
+    assert_eq!(grown.hull(), built.hull());
 }
 
 fn psnr(a: &[u8], b: &[u8]) -> f64 {

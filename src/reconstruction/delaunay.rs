@@ -277,17 +277,24 @@ impl Locator {
 #[derive(Debug)]
 pub(crate) struct Rebuild;
 
-/// How many points of a progressive set are bulk loaded by `spade` before the rest is
-/// inserted (so that a degenerate start, all points collinear, is `spade`'s to handle).
+/// How many points of a progressive set `spade` bulk loads, at the least, before the rest
+/// is inserted: a start of several collinear points, which has no triangle to insert into,
+/// is `spade`'s to handle (more are bulk loaded if these have no triangle).
 const SEED: usize = 64;
 
 // `Cells`' builders over the exact triangulation (the type is in `cells.rs`, which does not
 // import this module).
 impl Cells {
     /// The canonical cells of `mesh`, whose vertex data index `lattice` (the exact point of
-    /// every sample). `None` if some vertex has no exact point, if an exact point is beyond
-    /// [`crate::lattice::EXACT_LIMIT`], or if the triangulation is inconsistent with the
-    /// exact points (then the caller keeps `mesh`'s own triangles).
+    /// every sample), made exact by sliver removal and Lawson flips. `None` if some vertex
+    /// has no exact point, if an exact point is beyond [`crate::lattice::EXACT_LIMIT`], or if
+    /// the triangulation is inconsistent with the exact points (then the caller keeps
+    /// `mesh`'s own triangles).
+    ///
+    /// The codec builds the cells by [`Cells::incremental`] (and [`Cells::atlas`]); this
+    /// builder, from a whole triangulation made independently of them, serves the tests and
+    /// benches as a cross-check, and callers (the lab) that have a `spade` triangulation in
+    /// hand.
     ///
     /// ```
     /// use qcs::lattice::ZZeta;
@@ -311,15 +318,20 @@ impl Cells {
         Some(LiveCells::build(mesh, lattice)?.cells())
     }
 
-    /// The canonical cells of the points `lattice` (exact points, at pixel `positions`),
-    /// built without a whole `spade` triangulation: `spade` bulk loads the first few points
-    /// and the others are inserted with exact predicates, in rounds of doubling size.
-    /// Faster than [`Cells::build`] on progressive sites (`benches/cells.rs`), and the same
-    /// cells. `None` if a point has no exact point or is beyond
-    /// [`crate::lattice::EXACT_LIMIT`], if the first few points are all collinear and more
-    /// follow (`spade`'s triangulation of them has no triangle to insert into), or,
-    /// defensively, if the insertion finds the mesh inconsistent: in the last two cases
-    /// [`Cells::build`] gives the cells.
+    /// The canonical cells of the points `lattice` (exact points, at pixel `positions`), by
+    /// exact insertion: `spade` bulk loads the first 64 points (or, while those are all
+    /// collinear, twice as many, until they have a triangle or are all the points) and the
+    /// others are inserted with exact predicates, in rounds of doubling size. This is how
+    /// the codec builds the cells (a [`super::SampleSet`] keeps the structure to insert
+    /// more points; [`Cells::atlas`] speeds up a final set). The same cells as
+    /// [`Cells::build`] on `spade`'s whole triangulation, and faster on progressive sites
+    /// (`benches/cells.rs`). Should the insertion give up (an inconsistency between
+    /// `spade`'s start and the exact predicates, never observed), the cells are built once
+    /// more from `spade`'s triangulation of all the points.
+    ///
+    /// `None` if a point has no exact point or is beyond [`crate::lattice::EXACT_LIMIT`]
+    /// (or, defensively, if even that second build finds `spade`'s triangulation
+    /// inconsistent). Fewer than three points, or all collinear, have no cells (empty).
     ///
     /// ```
     /// use qcs::reconstruction::{Cells, SampleSet};
@@ -385,18 +397,45 @@ impl LiveCells {
         })
     }
 
-    /// For a whole progressive set (sample order, mirror points after their sample): `spade`
-    /// bulk loads the first points, the rest are inserted. `None` if some point is not exact,
-    /// or if the insertion gives up: when the first [`SEED`] points are all collinear and
-    /// more follow (nothing to insert into), or defensively (the caller then bulk loads them
-    /// all).
+    /// For a whole progressive set (sample order, mirror points after their sample): the
+    /// one builder of the cells ([`Cells::incremental`] says how). `None` if some point is
+    /// not exact, or if both the insertion and the build from `spade`'s whole triangulation
+    /// give up (defensive).
     pub(crate) fn grow(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
-        let seed = lattice.len().min(SEED);
+        let n = lattice.len().min(positions.len());
+        let (positions, lattice) = (&positions[..n], &lattice[..n]);
+        if !lattice.iter().all(|x| x.is_some_and(within_exact_limit)) {
+            return None;
+        }
+        LiveCells::seeded(positions, lattice).or_else(|| LiveCells::whole(positions, lattice))
+    }
+
+    /// `spade` bulk loads the first [`SEED`] points, or twice as many while they have no
+    /// triangle and more follow; the rest are inserted. A start of exactly collinear points
+    /// has no triangle whether `spade` finds none or finds slivers (its `f64` positions
+    /// rounded off the line), which [`LiveCells::build`] drops. `None` if the insertion
+    /// gives up.
+    fn seeded(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
+        let n = lattice.len();
+        let mut seed = n.min(SEED);
+        loop {
+            let mut mesh = SampleMesh::new();
+            mesh::sync(&mut mesh, &positions[..seed], &mut 0);
+            let mut live = LiveCells::build(&mesh, &lattice[..seed])?;
+            if seed < n && !live.mesh.alive.contains(&true) {
+                seed = n.min(2 * seed);
+                continue;
+            }
+            live.extend(lattice).ok()?;
+            return Some(live);
+        }
+    }
+
+    /// From `spade`'s triangulation of all the points.
+    fn whole(positions: &[Point], lattice: &[Option<ZZeta>]) -> Option<LiveCells> {
         let mut mesh = SampleMesh::new();
-        mesh::sync(&mut mesh, &positions[..seed], &mut 0);
-        let mut live = LiveCells::build(&mesh, &lattice[..seed])?;
-        live.extend(lattice).ok()?;
-        Some(live)
+        mesh::sync(&mut mesh, positions, &mut 0);
+        LiveCells::build(&mesh, lattice)
     }
 
     /// The cells as they are now.
@@ -1002,6 +1041,91 @@ mod tests {
     use super::*;
     use crate::lattice::{incircle, orient};
     use crate::sites::Quasicrystal;
+    use proptest::prelude::*;
+
+    /// `x·ζ`.
+    fn turn(x: ZZeta) -> ZZeta {
+        let [a, b, c, d] = x.0;
+        ZZeta([-d, a - d, b - d, c - d])
+    }
+
+    /// `m·x`.
+    fn times(m: i64, x: ZZeta) -> ZZeta {
+        ZZeta(x.0.map(|n| m * n))
+    }
+
+    /// `x + y`.
+    fn plus(x: ZZeta, y: ZZeta) -> ZZeta {
+        ZZeta([0, 1, 2, 3].map(|k| x.0[k] + y.0[k]))
+    }
+
+    /// A degenerate start of about `len` points from `base` along `dir`, by `kind`: 0, on one
+    /// line (in a scrambled order, with repeats if `len` is a multiple of 37); 1, on concentric
+    /// regular pentagons about `base` (each ring cocircular); 2, pairs mirrored about the
+    /// real axis (isosceles trapezoids, cocircular); then the `rest`.
+    fn degenerate(kind: u8, len: usize, base: ZZeta, dir: ZZeta, rest: &[ZZeta]) -> Vec<ZZeta> {
+        let mut v: Vec<ZZeta> = match kind {
+            0 => (0..len)
+                .map(|k| plus(base, times((k * 37 % len) as i64, dir)))
+                .collect(),
+            1 => (1..=len.div_ceil(5) as i64)
+                .flat_map(|r| {
+                    let mut w = times(r, dir);
+                    (0..5).map(move |_| {
+                        w = turn(w);
+                        plus(base, w)
+                    })
+                })
+                .collect(),
+            _ => (0..len.div_ceil(2) as i64)
+                .flat_map(|m| {
+                    let [a, b, c, d] = plus(base, times(m, dir)).0;
+                    [ZZeta([a, b, c, d]), ZZeta([a - b, -b, d - b, c - b])]
+                })
+                .collect(),
+        };
+        v.extend_from_slice(rest);
+        v
+    }
+
+    /// Exact insertion against `spade`'s whole triangulation made exact (the retry, and
+    /// [`Cells::build`]): the same cells and hull, and the insertion gives no occasion to
+    /// retry.
+    fn insertion_matches_whole(zz: &[ZZeta]) -> Result<(), TestCaseError> {
+        let positions: Vec<Point> = zz
+            .iter()
+            .map(|x| x.to_f64())
+            .map(|(re, im)| [500.0 + 10.0 * re, 500.0 + 10.0 * im])
+            .collect();
+        let lattice: Vec<Option<ZZeta>> = zz.iter().copied().map(Some).collect();
+        let whole = LiveCells::whole(&positions, &lattice).map(|l| l.cells());
+        let seeded = LiveCells::seeded(&positions, &lattice).map(|l| l.cells());
+        let key = |c: Cells| {
+            let mut v: Vec<Vec<u32>> = c.iter().map(<[u32]>::to_vec).collect();
+            v.sort();
+            (v, c.hull().to_vec())
+        };
+        prop_assert!(seeded.is_some(), "insertion gave up");
+        prop_assert_eq!(seeded.map(key), whole.map(key));
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn insertion_equals_whole_triangulation_from_degenerate_starts(
+            kind in 0u8..3,
+            len in 1usize..400,
+            base in proptest::array::uniform4(-20i64..20),
+            dir in proptest::array::uniform4(-2i64..3),
+            rest in proptest::collection::vec(proptest::array::uniform4(-8i64..8), 0..150),
+        ) {
+            let dir = ZZeta::new(dir);
+            prop_assume!(dir != ZZeta::new([0; 4]));
+            let rest: Vec<ZZeta> = rest.into_iter().map(ZZeta::new).collect();
+            insertion_matches_whole(&degenerate(kind, len, ZZeta::new(base), dir, &rest))?;
+        }
+    }
 
     /// Points on a hull edge, beyond a hull edge's line, and outside seeing a straight run
     /// of collinear hull sites: the same cells as spade's triangulation repaired.
