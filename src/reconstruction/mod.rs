@@ -504,7 +504,9 @@ impl SampleSet {
 
     /// Brings the cells up to date: by inserting the new points into the kept
     /// triangulation, or else afresh, by look-up ([`Cells::atlas`]) if `last` (no more
-    /// points will come, so no triangulation need be kept), or by exact insertion.
+    /// points will come, so no triangulation need be kept), or by exact insertion
+    /// ([`Cells::incremental`]'s builder, whose structure is kept). No cells if a point is
+    /// not exact or the points have no triangle (fewer than three, or all collinear).
     fn sync_cells(&mut self, last: bool) {
         let pts = &self.points;
         let n = pts.positions.len();
@@ -528,12 +530,7 @@ impl SampleSet {
                 cells = Cells::atlas(&pts.positions, &pts.lattice);
             }
             if cells.is_none() {
-                // By exact insertion; spade's whole triangulation only if that gives up,
-                // which it does when the first points it starts from are all collinear.
-                self.live = LiveCells::grow(&pts.positions, &pts.lattice).or_else(|| {
-                    mesh::sync(&mut self.mesh, &pts.positions, &mut self.synced);
-                    LiveCells::build(&self.mesh, &pts.lattice)
-                });
+                self.live = LiveCells::grow(&pts.positions, &pts.lattice);
             }
         }
         let cells = cells.or_else(|| self.live.as_ref().map(LiveCells::cells));
