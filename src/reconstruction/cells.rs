@@ -4,9 +4,13 @@
 //! Delaunay *triangulation* is not unique: a triangulator splits those cells by insertion
 //! order and rounding. The Delaunay *subdivision* — every cell a convex polygon whose
 //! vertices lie on an empty circle — is unique for a set of sites. It is computed with the
-//! exact predicates of [`crate::lattice::incircle`], either from any triangulation `spade`
-//! returns ([`Cells::build`]) or by exact incremental insertion ([`Cells::incremental`], what
-//! a [`super::SampleSet`] uses):
+//! exact predicates of [`crate::lattice::incircle`] from a triangulation `spade` returns:
+//! the codec's one builder, [`Cells::incremental`] (what a [`super::SampleSet`] uses), has
+//! `spade` triangulate the first points and inserts the others with exact predicates, and
+//! [`Cells::atlas`] speeds it up for a set that gets no more points; [`Cells::build`] takes
+//! `spade`'s triangulation of all the points (the tests' cross-check, and the insertion's
+//! retry should it ever give up). From `spade`'s triangles (of the start, or of all the
+//! points; an inserted point splits a triangle and gets exact flips around it):
 //!
 //! 1. triangles that are exactly degenerate (three collinear sites on the convex hull, which
 //!    `f64` rounding can show as a sliver) are flipped away or dropped;
