@@ -529,8 +529,6 @@ fn a_collinear_start_still_gets_the_canonical_cells() {
     // insertion has spade triangulate to start from, give no triangle to insert into, so
     // the start takes more points (128: all of them here). Exact insertion gives the cells
     // of spade's whole triangulation, and a SampleSet draws them.
-    // The points are above and left of the 8 × 8 image, so none has a mirror point.
-    let frame = qcs::sites::Frame::default_for(8, 8);
     // ζ⁴ − ζ = −2i·sin 72°: m of it move a point down by 1.9·m lattice units.
     let down = |m: i64| ZZeta::new([-m, -2 * m, -m, -m]);
     let mut points: Vec<ZZeta> = (0..70)
@@ -538,17 +536,7 @@ fn a_collinear_start_still_gets_the_canonical_cells() {
         .collect();
     // Below the line's first two points: an empty rectangle, cocircular, one cell.
     points.extend((0..2).map(|k| add(ZZeta::new([-1000 - k, 0, 0, 0]), down(30))));
-    let mut set = SampleSet::new(8, 8, 1);
-    for (k, &x) in points.iter().enumerate() {
-        set.try_push_exact(frame.position(x), x, &[k as u8])
-            .expect("an exact point");
-    }
-    assert_eq!(set.points().len(), points.len(), "no mirror point");
-    let lattice = set.point_lattice().to_vec();
-    let grown = Cells::incremental(set.points(), &lattice).expect("exact insertion");
-    let built = Cells::build(&set.triangulation().clone(), &lattice).expect("spade path");
-    assert_eq!(canonical(&grown, &points), canonical(&built, &points));
-    assert_eq!(grown.hull(), built.hull());
+    let (mut set, built) = insertion_matches_spade_far_from_the_image(&points);
     let cells = set.cells().expect("the canonical cells");
     assert_eq!(canonical(cells, &points), canonical(&built, &points));
     assert_eq!(cells.histogram(), [0, 0, 0, 68, 1]);
@@ -559,7 +547,6 @@ fn a_long_collinear_start_then_points_off_the_line() {
     // 300 exact points on a slanted line (the start of 64 points has to double three times
     // to reach one off it), then 40 scattered points, some further along the line: exact
     // insertion gives the cells of spade's whole triangulation.
-    let frame = qcs::sites::Frame::default_for(8, 8);
     // 1 + ζ⁴ (a step right and down), from far left of the image, like the line above.
     let step = ZZeta::new([0, -1, -1, -1]);
     let far = add(
@@ -576,6 +563,15 @@ fn a_long_collinear_start_then_points_off_the_line() {
             add(on(rng.below(300) as i64), random_point(&mut rng, 12))
         });
     }
+    let (_, built) = insertion_matches_spade_far_from_the_image(&points);
+    assert!(built.len() > 40, "{}", built.len());
+}
+
+/// A set of exact `points` above and left of an 8 × 8 image (so none has a mirror point),
+/// and the cells of spade's whole triangulation, which exact insertion must give too, cell
+/// for cell and with the same hull.
+fn insertion_matches_spade_far_from_the_image(points: &[ZZeta]) -> (SampleSet, Cells) {
+    let frame = qcs::sites::Frame::default_for(8, 8);
     let mut set = SampleSet::new(8, 8, 1);
     for (k, &x) in points.iter().enumerate() {
         set.try_push_exact(frame.position(x), x, &[k as u8])
@@ -585,9 +581,9 @@ fn a_long_collinear_start_then_points_off_the_line() {
     let lattice = set.point_lattice().to_vec();
     let grown = Cells::incremental(set.points(), &lattice).expect("exact insertion");
     let built = Cells::build(&set.triangulation().clone(), &lattice).expect("spade path");
-    assert!(grown.len() > 40, "{}", grown.len());
-    assert_eq!(canonical(&grown, &points), canonical(&built, &points));
+    assert_eq!(canonical(&grown, points), canonical(&built, points));
     assert_eq!(grown.hull(), built.hull());
+    (set, built)
 }
 
 fn psnr(a: &[u8], b: &[u8]) -> f64 {
