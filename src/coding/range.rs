@@ -306,6 +306,16 @@ impl RangeDecoder {
         self.missing == 0
     }
 
+    /// How many runs of at most `margin` bytes [`RangeDecoder::decode_fast`] can take now, one
+    /// after the other ([`RangeDecoder::ready_for_fast`] for each; 0 if not for the first).
+    pub(crate) fn fast_runs(&mut self, bytes: &[u8], margin: usize) -> usize {
+        if self.ready_for_fast(bytes, margin) {
+            (bytes.len() - self.pos) / margin
+        } else {
+            0
+        }
+    }
+
     /// [`RangeDecoder::decode`] when [`RangeDecoder::ready_for_fast`] said so: no byte is
     /// missing, and the bytes it reads are there.
     #[inline(always)]

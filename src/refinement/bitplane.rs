@@ -464,14 +464,15 @@ impl BandState {
     fn sign_context(&self, s: usize, x: usize, y: usize) -> (usize, bool) {
         let (lx, ly) = (x % BLOCK, y % BLOCK);
         let within = self.within(lx, ly);
-        let (i, stride) = (self.at(s, x, y) as isize, self.stride as isize);
-        let c = |dx: isize, dy: isize| -> i32 {
-            let v = if within {
-                // Cells past the band's edge are never significant.
-                self.flags[(i + dy * stride + dx) as usize]
-            } else {
-                self.flags_near(x, y, dx, dy)
-            };
+        // Left, right, up, down.
+        let [l, r, u, d] = if within {
+            let (i, stride) = (self.at(s, x, y), self.stride);
+            let f = &self.flags;
+            [f[i - 1], f[i + 1], f[i - stride], f[i + stride]]
+        } else {
+            [(-1, 0), (1, 0), (0, -1), (0, 1)].map(|(dx, dy)| self.flags_near(x, y, dx, dy))
+        };
+        let c = |v: Flags| -> i32 {
             if v & SIG == 0 {
                 0
             } else if v & NEG != 0 {
@@ -480,8 +481,8 @@ impl BandState {
                 1
             }
         };
-        let hc = (c(-1, 0) + c(1, 0)).clamp(-1, 1);
-        let vc = (c(0, -1) + c(0, 1)).clamp(-1, 1);
+        let hc = (c(l) + c(r)).clamp(-1, 1);
+        let vc = (c(u) + c(d)).clamp(-1, 1);
         match (hc, vc) {
             (1, 1) => (4, false),
             (1, 0) => (3, false),
@@ -571,6 +572,8 @@ pub(crate) struct Decoding<'a> {
     saved: RangeDecoder,
     journal: Vec<(usize, Prob)>,
     careful: bool,
+    /// Units that can still be coded alone and unjournalled without asking the decoder.
+    spare: usize,
 }
 
 /// Bytes a block's pass can read at most (1024 coefficients, each at most a significance,
@@ -591,6 +594,7 @@ impl<'a> Decoding<'a> {
             saved: dec,
             journal: Vec::new(),
             careful: true,
+            spare: 0,
         }
     }
 }
@@ -608,9 +612,11 @@ impl Symbols for Decoding<'_> {
 
     #[inline(always)]
     fn begin_unit(&mut self) -> Mode {
+        self.spare = 0;
         let mode = if self.dec.ready_for_fast(self.bytes, BLOCK_BYTES) {
             Mode::Block
-        } else if self.dec.ready_for_fast(self.bytes, UNIT_BYTES) {
+        } else if let Some(spare) = self.dec.fast_runs(self.bytes, UNIT_BYTES).checked_sub(1) {
+            self.spare = spare;
             Mode::Unit
         } else {
             self.saved = self.dec;
@@ -623,7 +629,17 @@ impl Symbols for Decoding<'_> {
 
     #[inline(always)]
     fn another_unit(&mut self) -> bool {
-        !self.careful && self.dec.ready_for_fast(self.bytes, UNIT_BYTES)
+        if self.careful {
+            return false;
+        }
+        if self.spare == 0 {
+            self.spare = self.dec.fast_runs(self.bytes, UNIT_BYTES);
+            if self.spare == 0 {
+                return false;
+            }
+        }
+        self.spare -= 1;
+        true
     }
 
     fn rollback(&mut self, probs: &mut [Prob]) {
