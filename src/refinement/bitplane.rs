@@ -333,12 +333,18 @@ impl BandState {
     /// The magnitude bits of coefficient (x, y), whose block has state `s`.
     #[inline(always)]
     fn mag_in(&self, s: usize, x: usize, y: usize) -> u32 {
+        self.mag_at(self.at(s, x, y), x, y)
+    }
+
+    /// The magnitude bits of coefficient (x, y), at `at` in `low` ([`BandState::at`]).
+    #[inline(always)]
+    fn mag_at(&self, at: usize, x: usize, y: usize) -> u32 {
         let high = if self.high.is_empty() {
             0
         } else {
             self.high[y * self.band.w + x]
         };
-        self.low[self.at(s, x, y)] as u32 | (high as u32) << 16
+        self.low[at] as u32 | (high as u32) << 16
     }
 
     #[inline(always)]
@@ -988,17 +994,20 @@ fn refine<S: Symbols, T: Tally>(
             };
             let i = y * band.band.w + x;
             let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
-            let before = if T::COUNTS { band.value_in(s, x, y) } else { 0 };
+            let value =
+                |band: &BandState, f| BandState::value_of(f, band.mag_at(at, x, y), band.current);
+            let before = if T::COUNTS { value(band, f) } else { 0 };
             let bit = sym.code(probs, set + CTX_REF + ctx, truth)?;
             if p < 16 {
                 band.low[at] |= (bit as u16) << p;
             } else {
                 band.set_mag(s, x, y, band.mag_in(s, x, y) | (bit as u32) << p);
             }
-            band.flags[at] = (f & !ODD) | REFINED | parity(p);
+            let g = (f & !ODD) | REFINED | parity(p);
+            band.flags[at] = g;
             if T::COUNTS {
                 let t = band.truth[i] as i64;
-                tally.gain(t - before as i64, t - band.value_in(s, x, y) as i64);
+                tally.gain(t - before as i64, t - value(band, g) as i64);
             }
         }
     }
@@ -1110,15 +1119,15 @@ fn make_significant<T: Tally>(
     }
 }
 
-/// Encoder: whether an insignificant coefficient of the block becomes significant at `p`.
+/// Encoder: whether a coefficient of a block that has no significant one (it is not active)
+/// becomes significant at `p`.
 fn block_has_new(band: &BandState, bx: u32, by: u32, p: u32) -> bool {
     let x0 = bx as usize * BLOCK;
     let y0 = by as usize * BLOCK;
+    let x1 = (x0 + BLOCK).min(band.band.w);
     (y0..(y0 + BLOCK).min(band.band.h)).any(|y| {
-        (x0..(x0 + BLOCK).min(band.band.w)).any(|x| {
-            let i = y * band.band.w + x;
-            band.flags_near(x, y, 0, 0) & SIG == 0 && (band.truth[i].unsigned_abs() >> p) & 1 != 0
-        })
+        let row = &band.truth[y * band.band.w + x0..y * band.band.w + x1];
+        row.iter().any(|t| (t.unsigned_abs() >> p) & 1 != 0)
     })
 }
 
