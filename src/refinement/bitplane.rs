@@ -1154,15 +1154,7 @@ mod tests {
             (40, 70),
             (100, 7),
         ] {
-            let band = Band {
-                x0: 0,
-                y0: 0,
-                w,
-                h,
-                orient: Orient::HighHigh,
-                level: 1,
-                stream: 1,
-            };
+            let band = Band::sized(w, h);
             let mut b = BandState::new(band, 0, Vec::new());
             let (bw, bh) = band.blocks();
             for blk in 0..bw * bh {

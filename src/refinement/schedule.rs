@@ -36,6 +36,20 @@ pub(crate) struct Band {
 }
 
 impl Band {
+    /// A `w × h` high-high band of the finest level, at the origin (for tests).
+    #[cfg(test)]
+    pub(crate) fn sized(w: usize, h: usize) -> Band {
+        Band {
+            x0: 0,
+            y0: 0,
+            w,
+            h,
+            orient: Orient::HighHigh,
+            level: 1,
+            stream: 1,
+        }
+    }
+
     pub(crate) fn len(&self) -> usize {
         self.w * self.h
     }
@@ -329,15 +343,7 @@ mod tests {
     #[test]
     fn blocks_are_each_visited_once_and_spread() {
         for (w, h) in [(1, 1), (32, 32), (33, 1), (100, 70), (1000, 40)] {
-            let band = Band {
-                x0: 0,
-                y0: 0,
-                w,
-                h,
-                orient: Orient::HighHigh,
-                level: 1,
-                stream: 1,
-            };
+            let band = Band::sized(w, h);
             let order = block_order(&band);
             let (bw, bh) = band.blocks();
             assert_eq!(order.len(), bw * bh);
@@ -345,15 +351,7 @@ mod tests {
             assert!(order.iter().all(|b| seen.insert(*b)));
         }
         // The first four blocks of a 4 × 4 grid are one in each quadrant.
-        let band = Band {
-            x0: 0,
-            y0: 0,
-            w: 128,
-            h: 128,
-            orient: Orient::HighHigh,
-            level: 1,
-            stream: 1,
-        };
+        let band = Band::sized(128, 128);
         assert_eq!(&block_order(&band)[..4], &[(0, 0), (0, 2), (2, 0), (2, 2)]);
     }
 
