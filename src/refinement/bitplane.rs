@@ -218,7 +218,7 @@ impl BandState {
 
     /// The state of block `blk` (row-major index), made now if it has none: its coefficients
     /// insignificant, those on its edges told of their significant neighbours in other
-    /// blocks. Returns its index in `blocks`.
+    /// blocks. Returns the index `s` of its state.
     fn open(&mut self, blk: usize) -> usize {
         if self.slot[blk] != UNOPENED {
             return self.slot[blk] as usize;
