@@ -298,7 +298,7 @@ impl RangeDecoder {
     /// Whether [`RangeDecoder::decode_fast`] may decode bits that read up to `margin` more
     /// bytes: the decoder has started, every byte it holds has arrived (missing ones are
     /// taken in now), and `margin` more have too.
-    pub(crate) fn ready_for_fast(&mut self, bytes: &[u8], margin: usize) -> bool {
+    fn ready_for_fast(&mut self, bytes: &[u8], margin: usize) -> bool {
         if !self.started || bytes.len() < self.pos + margin {
             return false;
         }

@@ -618,11 +618,12 @@ impl Symbols for Decoding<'_> {
 
     #[inline(always)]
     fn begin_unit(&mut self) -> Mode {
-        self.spare = 0;
-        let mode = if self.dec.ready_for_fast(self.bytes, BLOCK_BYTES) {
+        // One look at the bytes left decides the mode (a block needs BLOCK_BYTES of them).
+        let runs = self.dec.fast_runs(self.bytes, UNIT_BYTES);
+        self.spare = runs.saturating_sub(1);
+        let mode = if runs >= BLOCK_BYTES / UNIT_BYTES {
             Mode::Block
-        } else if let Some(spare) = self.dec.fast_runs(self.bytes, UNIT_BYTES).checked_sub(1) {
-            self.spare = spare;
+        } else if runs > 0 {
             Mode::Unit
         } else {
             self.saved = self.dec;
