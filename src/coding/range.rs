@@ -71,11 +71,8 @@ impl Prob {
     /// Adapts to an observed bit. `p` stays within `1..=4095`.
     pub fn update(&mut self, bit: bool) {
         let shift = (1 + self.n as u32 / 2).min(5);
-        if bit {
-            self.p -= self.p >> shift;
-        } else {
-            self.p += (PROB_ONE - self.p) >> shift;
-        }
+        let (down, up) = (self.p >> shift, (PROB_ONE - self.p) >> shift);
+        self.p = if bit { self.p - down } else { self.p + up };
         self.n = self.n.saturating_add(1).min(16);
     }
 }
@@ -321,14 +318,10 @@ impl RangeDecoder {
     #[inline(always)]
     pub(crate) fn decode_fast(&mut self, p: &mut Prob, bytes: &[u8]) -> bool {
         let bound = (self.range >> PROB_BITS) * p.p as u32;
-        let bit = if self.lo < bound {
-            self.range = bound;
-            false
-        } else {
-            self.lo -= bound;
-            self.range -= bound;
-            true
-        };
+        // Selects rather than branches: the bit is as hard to predict as the data.
+        let bit = self.lo >= bound;
+        self.lo -= if bit { bound } else { 0 };
+        self.range = if bit { self.range - bound } else { bound };
         while self.range < TOP {
             self.range <<= 8;
             self.lo = (self.lo << 8) | bytes[self.pos] as u32;

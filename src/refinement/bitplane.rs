@@ -55,6 +55,21 @@ const N_RIGHT: u8 = 2;
 const N_UP: u8 = 4;
 const N_DOWN: u8 = 8;
 
+/// The sign context and whether the sign is coded flipped, for the horizontal and vertical
+/// contributions (each −1, 0 or 1) of a coefficient's neighbours, at 3 (h + 1) + v + 1
+/// (JPEG 2000's Table D.3).
+const SIGN_CONTEXT: [(usize, bool); 9] = [
+    (4, true),  // h −1, v −1
+    (3, true),  // h −1, v 0
+    (2, true),  // h −1, v 1
+    (1, true),  // h 0, v −1
+    (0, false), // h 0, v 0
+    (1, false), // h 0, v 1
+    (2, false), // h 1, v −1
+    (3, false), // h 1, v 0
+    (4, false), // h 1, v 1
+];
+
 /// The significance context of every neighbour pattern, per orientation.
 static SIG_CONTEXT: [[u8; 256]; 4] = sig_context_table();
 
@@ -489,17 +504,7 @@ impl BandState {
         };
         let hc = (c(l) + c(r)).clamp(-1, 1);
         let vc = (c(u) + c(d)).clamp(-1, 1);
-        match (hc, vc) {
-            (1, 1) => (4, false),
-            (1, 0) => (3, false),
-            (1, -1) => (2, false),
-            (0, 1) => (1, false),
-            (0, 0) => (0, false),
-            (0, -1) => (1, true),
-            (-1, 1) => (2, true),
-            (-1, 0) => (3, true),
-            _ => (4, true),
-        }
+        SIGN_CONTEXT[(3 * (hc + 1) + vc + 1) as usize]
     }
 
     fn block_context(&self, bx: usize, by: usize) -> usize {
@@ -533,10 +538,10 @@ pub(crate) trait Symbols {
     fn begin_unit(&mut self) -> Mode {
         Mode::Block
     }
-    /// Called after a unit coded alone and unjournalled: whether the next unit of its block
-    /// can be coded the same way without returning to the pass runner.
-    fn another_unit(&mut self) -> bool {
-        false
+    /// Called when the units allowed so far were coded alone and unjournalled: how many more
+    /// units of the block can be coded the same way without returning to the pass runner.
+    fn more_units(&mut self) -> usize {
+        0
     }
     /// Called when a unit ran out of bytes: puts back the coder and the probabilities it
     /// changed as they were at the unit's start.
@@ -635,18 +640,14 @@ impl Symbols for Decoding<'_> {
     }
 
     #[inline(always)]
-    fn another_unit(&mut self) -> bool {
+    fn more_units(&mut self) -> usize {
         if self.careful {
-            return false;
+            return 0;
         }
         if self.spare == 0 {
             self.spare = self.dec.fast_runs(self.bytes, UNIT_BYTES);
-            if self.spare == 0 {
-                return false;
-            }
         }
-        self.spare -= 1;
-        true
+        std::mem::take(&mut self.spare)
     }
 
     fn rollback(&mut self, probs: &mut [Prob]) {
@@ -822,14 +823,14 @@ impl StreamState {
     }
 
     /// Codes the next unit of the current pass if `one` (and the units after it in its block
-    /// while [`Symbols::another_unit`] says so), else the rest of the current block;
+    /// while [`Symbols::more_units`] allows), else the rest of the current block;
     /// journalled in `undo` if given.
     fn step<S: Symbols, T: Tally>(
         &mut self,
         sym: &mut S,
         tally: &mut T,
         one: bool,
-        mut undo: Option<&mut Undo>,
+        undo: Option<&mut Undo>,
     ) -> Option<Step> {
         let pass = self.passes[self.cursor.pass];
         let ti = self.targets[self.cursor.pass];
@@ -877,40 +878,128 @@ impl StreamState {
         let y0 = by as usize * BLOCK;
         let cols = BLOCK.min(band.band.w - x0);
         let rows = BLOCK.min(band.band.h - y0);
-        let columns = cols * rows.div_ceil(4);
-        if let Some(u) = undo.as_deref_mut() {
-            u.block = Some((blk, band.block_active[blk]));
-        }
         let s = band.open(blk);
-        let (mut stripe, mut x) = (cur.column / cols, x0 + cur.column % cols);
-        loop {
+        if let Some(u) = undo {
+            // One unit, its coefficients journalled first.
+            u.block = Some((blk, band.block_active[blk]));
+            let (stripe, x) = (cur.column / cols, x0 + cur.column % cols);
             let ys = y0 + 4 * stripe;
             let ye = (ys + 4).min(y0 + rows);
-            if let Some(u) = undo.as_deref_mut() {
-                for y in ys..ye {
-                    u.coefficients
-                        .push((x, y, band.flags(s, x, y), band.mag_in(s, x, y)));
-                }
+            for y in ys..ye {
+                (u.coefficients).push((x, y, band.flags(s, x, y), band.mag_in(s, x, y)));
             }
-            let col = Column { s, x, ys, ye };
+            let col = Column::new(band, s, x, ys, ye);
             match pass.kind {
                 PassKind::Propagation => propagate(band, sym, probs, tally, set, col, p)?,
                 PassKind::Refinement => refine(band, sym, probs, tally, set, col, p)?,
                 PassKind::Cleanup => clean(band, sym, probs, tally, set, col, p)?,
             }
             cur.column += 1;
-            if cur.column == columns {
+            if cur.column == cols * rows.div_ceil(4) {
                 return Some(next_block(band, cur));
             }
-            if one && !sym.another_unit() {
-                return Some(Step::More);
-            }
-            x += 1;
-            if x == x0 + cols {
-                (stripe, x) = (stripe + 1, x0);
-            }
+            return Some(Step::More);
+        }
+        let block = BlockAt {
+            s,
+            x0,
+            y0,
+            cols,
+            rows,
+        };
+        let left = if one { 1 } else { usize::MAX };
+        match pass.kind {
+            PassKind::Propagation => scan(
+                band,
+                sym,
+                probs,
+                tally,
+                cur,
+                block,
+                left,
+                |b, sym, pr, t, col| propagate(b, sym, pr, t, set, col, p),
+            ),
+            PassKind::Refinement => scan(
+                band,
+                sym,
+                probs,
+                tally,
+                cur,
+                block,
+                left,
+                |b, sym, pr, t, col| refine(b, sym, pr, t, set, col, p),
+            ),
+            PassKind::Cleanup => scan(
+                band,
+                sym,
+                probs,
+                tally,
+                cur,
+                block,
+                left,
+                |b, sym, pr, t, col| clean(b, sym, pr, t, set, col, p),
+            ),
         }
     }
+}
+
+/// The block being coded: its state `s`, its first coefficient (x0, y0), its size.
+#[derive(Clone, Copy)]
+struct BlockAt {
+    s: usize,
+    x0: usize,
+    y0: usize,
+    cols: usize,
+    rows: usize,
+}
+
+/// Codes the stripe columns of a block with `code`, from the cursor's column on: `left` of
+/// them, then as many more as [`Symbols::more_units`] allows each time (all, if `left` is
+/// `usize::MAX`). Moves the cursor past the columns coded.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn scan<S: Symbols, T: Tally>(
+    band: &mut BandState,
+    sym: &mut S,
+    probs: &mut [Prob],
+    tally: &mut T,
+    cur: &mut Cursor,
+    BlockAt {
+        s,
+        x0,
+        y0,
+        cols,
+        rows,
+    }: BlockAt,
+    mut left: usize,
+    mut code: impl FnMut(&mut BandState, &mut S, &mut [Prob], &mut T, Column) -> Option<()>,
+) -> Option<Step> {
+    let (first_stripe, first_x) = (cur.column / cols, cur.column % cols);
+    for stripe in first_stripe..rows.div_ceil(4) {
+        let ys = y0 + 4 * stripe;
+        let ye = (ys + 4).min(y0 + rows);
+        let start = if stripe == first_stripe { first_x } else { 0 };
+        let row = band.at(s, x0, ys);
+        for dx in start..cols {
+            if left == 0 {
+                left = sym.more_units();
+                if left == 0 {
+                    cur.column = stripe * cols + dx;
+                    return Some(Step::More);
+                }
+            }
+            left -= 1;
+            let col = Column {
+                s,
+                x: x0 + dx,
+                ys,
+                ye,
+                at: row + dx,
+            };
+            code(band, sym, probs, tally, col)?;
+        }
+    }
+    Some(next_block(band, cur))
 }
 
 /// Moves the cursor to the next block; the pass is done after its last block.
@@ -935,13 +1024,30 @@ fn parity(p: u32) -> Flags {
     }
 }
 
-/// A stripe column being coded: column `x`, rows `ys..ye`, of the block with state `s`.
+/// A stripe column being coded: column `x`, rows `ys..ye`, of the block with state `s`; its
+/// first coefficient is at `at` in the band's state ([`BandState::at`]).
 #[derive(Clone, Copy)]
 struct Column {
     s: usize,
     x: usize,
     ys: usize,
     ye: usize,
+    at: usize,
+}
+
+impl Column {
+    fn new(band: &BandState, s: usize, x: usize, ys: usize, ye: usize) -> Column {
+        let at = band.at(s, x, ys);
+        Column { s, x, ys, ye, at }
+    }
+}
+
+/// The flags of a whole stripe column starting at `at`, OR-ed: what none of its
+/// coefficients has.
+#[inline(always)]
+fn column_flags(band: &BandState, at: usize) -> Flags {
+    let (f, stride) = (&band.flags, band.stride);
+    f[at] | f[at + stride] | f[at + 2 * stride] | f[at + 3 * stride]
 }
 
 /// A propagation pass over a stripe column.
@@ -952,11 +1058,21 @@ fn propagate<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    Column { s, x, ys, ye }: Column,
+    Column {
+        s,
+        x,
+        ys,
+        ye,
+        at: l0,
+    }: Column,
     p: u32,
 ) -> Option<()> {
+    // No coefficient with a significant neighbour: nothing to code.
+    if ye - ys == 4 && column_flags(band, l0) >> NEIGHBOURS == 0 {
+        return Some(());
+    }
     let orient = band.band.orient as usize;
-    let (l0, stride) = (band.at(s, x, ys), band.stride);
+    let stride = band.stride;
     for y in ys..ye {
         let at = l0 + (y - ys) * stride;
         let f = band.flags[at];
@@ -980,10 +1096,20 @@ fn refine<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    Column { s, x, ys, ye }: Column,
+    Column {
+        s,
+        x,
+        ys,
+        ye,
+        at: l0,
+    }: Column,
     p: u32,
 ) -> Option<()> {
-    let (l0, stride) = (band.at(s, x, ys), band.stride);
+    // No significant coefficient: nothing to code.
+    if ye - ys == 4 && column_flags(band, l0) & SIG == 0 {
+        return Some(());
+    }
+    let stride = band.stride;
     for y in ys..ye {
         let at = l0 + (y - ys) * stride;
         let f = band.flags[at];
@@ -1023,18 +1149,22 @@ fn clean<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    Column { s, x, ys, ye }: Column,
+    Column {
+        s,
+        x,
+        ys,
+        ye,
+        at: l0,
+    }: Column,
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
-    let (l0, stride) = (band.at(s, x, ys), band.stride);
+    let stride = band.stride;
     let mut y = ys;
     if ye - ys == 4 {
         // No coefficient significant, visited or with a significant neighbour.
         const BUSY: Flags = SIG | VISITED | 0xff << NEIGHBOURS;
-        let f = &band.flags;
-        let quiet = (f[l0] | f[l0 + stride] | f[l0 + 2 * stride] | f[l0 + 3 * stride]) & BUSY == 0;
-        if quiet {
+        if column_flags(band, l0) & BUSY == 0 {
             let first = if S::ENCODES {
                 (ys..ye).position(|yy| {
                     let i = yy * band.band.w + x;
