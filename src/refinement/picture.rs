@@ -9,11 +9,9 @@
 //! planes and picture agree, and no channel is biased by YCoCg-R's floors.
 
 use super::bitplane::{BandState, StreamState};
-use super::resample::Axis;
+use super::resample::Folded;
 use super::schedule::Orient;
-use super::wavelet::{
-    inverse, inverse_but_rows, inverse_row_into, low_size, splits, synthesise_rows, Kernel,
-};
+use super::wavelet::{inverse, inverse_but_rows, inverse_row_into, low_size, splits, Kernel};
 use rayon::prelude::*;
 use std::borrow::Borrow;
 
@@ -221,9 +219,9 @@ fn draw<B: Borrow<BandState> + Send>(src: &Source, stop: u32, bands: Vec<Vec<B>>
 }
 
 /// A thumbnail of `tw × th` (informative): the picture with the bands finer than level
-/// `decoded` taken as zero, averaged over each thumbnail pixel (`Axis`). Those bands being
-/// zero, the rest of the inverse transform and the average are made one axis at a time: on
-/// the rows of the low-low band of level `decoded`, then on the columns of the result.
+/// `decoded` taken as zero, averaged over each thumbnail pixel. Those bands being zero, the
+/// rest of the inverse transform and the average fold into taps over the low-low band of
+/// level `decoded` ([`Folded`]), applied to its rows, then to the columns of the result.
 pub(crate) fn thumbnail(
     src: &Source,
     streams: &[Option<&StreamState>],
@@ -231,17 +229,23 @@ pub(crate) fn thumbnail(
     (tw, th): (usize, usize),
 ) -> Vec<u8> {
     let (w, h) = low_size(src.width, src.height, decoded);
-    let ax = Axis::new(src.width, tw, src.width, 0);
-    let ay = Axis::new(src.height, th, src.height, 0);
+    let fx = Folded::new(src.kernel, src.width, decoded, tw);
+    let fy = Folded::new(src.kernel, src.height, decoded, th);
     let planes: Vec<Vec<i32>> = (bands_by_channel(src, streams).into_par_iter().enumerate())
         .map(|(c, bands)| {
             let mut p = channel_plane(src, c, bands, w, h);
             inverse(src.kernel, &mut p, w, h, src.levels - decoded, 0);
             let mut rows = vec![0; h * tw];
-            synthesise_rows(src.kernel, &p, w, (src.width, decoded), &ax, &mut rows);
+            for (row, o) in p.chunks_exact(w).zip(rows.chunks_exact_mut(tw)) {
+                fx.line(row, o);
+            }
             let mut columns = vec![0; tw * th];
-            let t = transpose(&rows, tw);
-            synthesise_rows(src.kernel, &t, h, (src.height, decoded), &ay, &mut columns);
+            for (column, o) in transpose(&rows, tw)
+                .chunks_exact(h)
+                .zip(columns.chunks_exact_mut(th))
+            {
+                fy.line(column, o);
+            }
             transpose(&columns, th)
         })
         .collect();

@@ -4,6 +4,8 @@
 //! otherwise each output pixel centre interpolates linearly between the two nearest source
 //! samples. Weights are integers, the result is rounded once.
 
+use super::wavelet::{inverse_row, low_size, Kernel};
+
 /// Per output pixel along one axis: the source indices and integer weights (their sum is
 /// the pixel's divisor).
 pub(crate) struct Axis {
@@ -66,17 +68,73 @@ impl Axis {
     }
 }
 
-impl Axis {
-    /// One line of values resampled: each output the weighted mean of its taps, rounded to
-    /// nearest.
-    pub(crate) fn line(&self, src: &[i32], out: &mut [i32]) {
-        for (o, taps) in out.iter_mut().zip(&self.taps) {
-            let (mut sum, mut total) = (0i64, 0i64);
-            for &(i, w) in taps {
-                sum += w as i64 * src[i] as i64;
-                total += w as i64;
+/// The picture synthesised from a low band alone (the `from` finer levels' bands taken as
+/// zero) along one axis of `full` pixels and averaged over `dst` output pixels (an [`Axis`]
+/// at level 0), folded into taps over the low band's samples: what a thumbnail draws without
+/// making the image-size lines. Linear but for the lifting's roundings, which the taps leave
+/// out (they move an output by less than one coefficient unit).
+pub(crate) struct Folded {
+    /// Per output pixel: the first of the low band's samples it weighs, and their weights
+    /// in 1/2^FOLD_BITS.
+    taps: Vec<(usize, Vec<i64>)>,
+}
+
+/// Fraction bits of a [`Folded`] weight.
+const FOLD_BITS: u32 = 24;
+
+impl Folded {
+    pub(crate) fn new(kernel: Kernel, full: usize, from: u32, dst: usize) -> Folded {
+        // Low-band samples this far apart are synthesised in one line: each one's response
+        // (about 3 samples to either side, however many levels) meets no other's, so every
+        // image-size sample belongs to the impulse nearest to it.
+        const APART: usize = 16;
+        const SCALE: i32 = 1 << 16;
+        let n = low_size(full, 1, from).0;
+        let axis = Axis::new(full, dst, full, 0);
+        let mut weights: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dst];
+        let (mut line, mut tmp) = (vec![0; full], Vec::new());
+        for r in 0..APART.min(n) {
+            line.fill(0);
+            (line[r..n].iter_mut().step_by(APART)).for_each(|v| *v = SCALE);
+            for l in (0..from).rev() {
+                inverse_row(kernel, &mut line[..low_size(full, 1, l).0], &mut tmp);
             }
-            *o = (2 * sum + total).div_euclid(2 * total) as i32;
+            let last = r + (n - 1 - r) / APART * APART;
+            for (taps, weights) in axis.taps.iter().zip(&mut weights) {
+                let total = taps.iter().map(|t| t.1).sum::<u64>() as f64 * SCALE as f64;
+                for &(i, w) in taps.iter().filter(|&&(i, _)| line[i] != 0) {
+                    // Image-size sample i stands at low-band sample i / 2^from.
+                    let at = (i + (1 << from >> 1)) >> from;
+                    let k = (at + APART / 2).saturating_sub(r) / APART;
+                    let j = (r + k * APART).min(last);
+                    let add = w as f64 * line[i] as f64 / total;
+                    match weights.iter_mut().find(|t| t.0 == j) {
+                        Some(t) => t.1 += add,
+                        None => weights.push((j, add)),
+                    }
+                }
+            }
+        }
+        let one = (1u64 << FOLD_BITS) as f64;
+        let taps = (weights.into_iter())
+            .map(|ws| {
+                let (first, last) = ws.iter().fold((n, 0), |(a, b), t| (a.min(t.0), b.max(t.0)));
+                let mut t = vec![0; (last + 1).saturating_sub(first)];
+                for (j, w) in ws {
+                    t[j - first] = (w * one).round() as i64;
+                }
+                (first.min(n - 1), t)
+            })
+            .collect();
+        Folded { taps }
+    }
+
+    /// One line of the low band (`n` samples) to `dst` output values, rounded to nearest.
+    pub(crate) fn line(&self, src: &[i32], out: &mut [i32]) {
+        for (o, (first, weights)) in out.iter_mut().zip(&self.taps) {
+            let taps = src[*first..].iter().zip(weights);
+            let sum: i64 = taps.map(|(&v, &w)| w * v as i64).sum();
+            *o = ((sum + (1 << (FOLD_BITS - 1))) >> FOLD_BITS) as i32;
         }
     }
 }
@@ -169,6 +227,44 @@ mod tests {
         // way from a sample to the next (the last clamped).
         let out = resample(&[0u8, 40, 80, 120], 4, 1, 1, 1, (8, 1), 4, 1);
         assert_eq!(out, vec![10, 50, 90, 120]);
+    }
+
+    /// The folded taps draw what synthesising the image-size line and averaging it do, to
+    /// within two units (the lifting's roundings; a quarter of a pixel level at the
+    /// encoder's 3 fraction bits), at the edges too.
+    #[test]
+    fn folded_taps_average_the_synthesised_line() {
+        let mut seed = 7u64;
+        for kernel in [Kernel::Integer97, Kernel::Reversible53] {
+            for (full, from, dst) in [(4000, 2, 500), (651, 1, 100), (97, 3, 5), (33, 2, 4)] {
+                let n = low_size(full, 1, from).0;
+                let row: Vec<i32> = (0..n)
+                    .map(|_| {
+                        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+                        ((seed >> 40) % 40000) as i32 - 20000
+                    })
+                    .collect();
+                let mut line = row.clone();
+                line.resize(full, 0);
+                let mut tmp = Vec::new();
+                for l in (0..from).rev() {
+                    inverse_row(kernel, &mut line[..low_size(full, 1, l).0], &mut tmp);
+                }
+                let axis = Axis::new(full, dst, full, 0);
+                let mut got = vec![0; dst];
+                Folded::new(kernel, full, from, dst).line(&row, &mut got);
+                for (o, taps) in axis.taps.iter().enumerate() {
+                    let total: u64 = taps.iter().map(|t| t.1).sum();
+                    let sum: f64 = taps.iter().map(|&(i, w)| w as f64 * line[i] as f64).sum();
+                    let want = sum / total as f64;
+                    assert!(
+                        (got[o] as f64 - want).abs() <= 2.0,
+                        "{kernel:?} {full} from {from} to {dst}, output {o}: {} vs {want}",
+                        got[o]
+                    );
+                }
+            }
+        }
     }
 
     #[test]

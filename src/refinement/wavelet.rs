@@ -184,7 +184,7 @@ fn forward_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
 }
 
 /// Inverse of [`forward_row`].
-fn inverse_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
+pub(crate) fn inverse_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
     tmp.clear();
     tmp.extend_from_slice(row);
     lift_row_back(kernel, tmp, row);
@@ -340,30 +340,6 @@ pub(crate) fn inverse_but_rows(kernel: Kernel, plane: &mut [i32], w: usize, h: u
     if levels > 0 {
         inverse(kernel, plane, w, h, levels, 1);
         inverse_columns(kernel, plane, w, w, h, &mut Vec::new());
-    }
-}
-
-/// Synthesises each row of `m` (`w` values each: a row of the low band of level `from` of
-/// a line `full` long) to the whole line with zero detail bands, and resamples it (`axis`)
-/// into `out` (`axis`'s output length per row).
-pub(crate) fn synthesise_rows(
-    kernel: Kernel,
-    m: &[i32],
-    w: usize,
-    (full, from): (usize, u32),
-    axis: &super::resample::Axis,
-    out: &mut [i32],
-) {
-    let mut line = vec![0i32; full];
-    let mut tmp = Vec::new();
-    let dw = out.len() / (m.len() / w).max(1);
-    for (row, o) in m.chunks_exact(w).zip(out.chunks_exact_mut(dw)) {
-        line[..w].copy_from_slice(row);
-        line[w..].fill(0);
-        for l in (0..from).rev() {
-            inverse_row(kernel, &mut line[..low_size(full, 1, l).0], &mut tmp);
-        }
-        axis.line(&line, o);
     }
 }
 
