@@ -8,12 +8,12 @@
 //! (Comparing at the level's own bytes would favour the level: a refinement's first bytes
 //! buy less than its next ones.) The levels stop at the first level that does not pay.
 //!
-//! The pictures compared are real decodes of the first passes, on the image itself up to an
-//! eighth of a megapixel and on an area-averaged copy of at most that size beyond (the first
-//! levels and the refinement's first bytes draw the same coarse picture at any size: a copy of
-//! 2^17 pixels instead of 2^18 decides as the image did on the eight dev photographs, the
-//! bundled images and a 12-megapixel photo, byte for byte, in 27% fewer instructions of a
-//! 651×450 encode; MEASUREMENTS.md).
+//! The pictures compared are real decodes of the first passes, on the image itself up to
+//! 2^15 pixels and on an area-averaged copy of that size beyond (the first levels and the
+//! refinement's first bytes draw the same coarse picture at any size: a copy of 2^15 pixels
+//! decides as the image did, byte for byte, on the eight dev photographs, the bundled images,
+//! a 12-megapixel photo and four synthetic pictures, and takes a third of a 651×450 encode's
+//! instructions less than one of 2^17; MEASUREMENTS.md).
 
 use super::levels;
 use crate::container::{Coding, Header, Layout};
@@ -28,7 +28,7 @@ pub(crate) const FIRST_LEVEL: u64 = 64;
 /// The most levels before a refinement.
 const MOST_LEVELS: u32 = 3;
 /// The largest picture the comparison is made on.
-const PROXY_PIXELS: u64 = 1 << 17;
+const PROXY_PIXELS: u64 = 1 << 15;
 /// How far past a level the pictures with and without it are compared, in its bytes.
 const HORIZON: usize = 4;
 /// Bytes the refinement's header and first layer's framing take.
