@@ -315,16 +315,13 @@ impl BandState {
     /// current bit-plane being `current` (spec/refinement.md §7).
     #[inline(always)]
     fn value_of(f: Flags, m: u32, current: u8) -> i32 {
-        if f & SIG == 0 {
-            return 0;
-        }
+        // Without branches, so that a row's values vectorise: all ones if significant, and
+        // the sign as a mask (two's complement negation is `(m ^ neg) - neg`).
+        let sig = ((f & SIG) as i32).wrapping_neg();
+        let neg = (((f & NEG) != 0) as i32).wrapping_neg();
         let k = current as u32 + ((f & ODD != 0) != (current & 1 == 1)) as u32;
         let m = (m + ((3u32 << k) >> 3)) as i32;
-        if f & NEG != 0 {
-            -m
-        } else {
-            m
-        }
+        ((m ^ neg).wrapping_sub(neg)) & sig
     }
 
     /// The lowest bit-plane known of coefficient (x, y), if it is significant.
@@ -493,14 +490,10 @@ impl BandState {
         } else {
             [(-1, 0), (1, 0), (0, -1), (0, 1)].map(|(dx, dy)| self.flags_near(x, y, dx, dy))
         };
+        // 0 if insignificant, else −1 if negative and 1 if not (without branches).
         let c = |v: Flags| -> i32 {
-            if v & SIG == 0 {
-                0
-            } else if v & NEG != 0 {
-                -1
-            } else {
-                1
-            }
+            let sig = (v & SIG) as i32;
+            sig - 2 * (sig & ((v & NEG) != 0) as i32)
         };
         let hc = (c(l) + c(r)).clamp(-1, 1);
         let vc = (c(u) + c(d)).clamp(-1, 1);
@@ -1046,8 +1039,9 @@ impl Column {
 /// coefficients has.
 #[inline(always)]
 fn column_flags(band: &BandState, at: usize) -> Flags {
-    let (f, stride) = (&band.flags, band.stride);
-    f[at] | f[at + stride] | f[at + 2 * stride] | f[at + 3 * stride]
+    let stride = band.stride;
+    let f = &band.flags[at..=at + 3 * stride];
+    f[0] | f[stride] | f[2 * stride] | f[3 * stride]
 }
 
 /// A propagation pass over a stripe column.
@@ -1161,10 +1155,16 @@ fn clean<S: Symbols, T: Tally>(
     let orient = band.band.orient as usize;
     let stride = band.stride;
     let mut y = ys;
+    // What the column's coefficients have (a partial stripe: taken as visited).
+    let all = if ye - ys == 4 {
+        column_flags(band, l0)
+    } else {
+        VISITED
+    };
     if ye - ys == 4 {
         // No coefficient significant, visited or with a significant neighbour.
         const BUSY: Flags = SIG | VISITED | 0xff << NEIGHBOURS;
-        if column_flags(band, l0) & BUSY == 0 {
+        if all & BUSY == 0 {
             let first = if S::ENCODES {
                 (ys..ye).position(|yy| {
                     let i = yy * band.band.w + x;
@@ -1198,8 +1198,10 @@ fn clean<S: Symbols, T: Tally>(
         }
         y += 1;
     }
-    for k in 0..ye - ys {
-        band.flags[l0 + k * stride] &= !VISITED;
+    if all & VISITED != 0 {
+        for k in 0..ye - ys {
+            band.flags[l0 + k * stride] &= !VISITED;
+        }
     }
     Some(())
 }
