@@ -605,7 +605,7 @@ pub fn save_image_icc(
     let name = path.file_name().unwrap_or_default().to_string_lossy();
     let part = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
     let written = encode_image(img, |img| {
-        let mut sink = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&part)?);
+        let mut sink = std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(&part)?);
         let kept = encode_into(img, format, icc, &mut sink)?;
         sink.flush()?;
         Ok(kept)

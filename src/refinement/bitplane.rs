@@ -239,6 +239,13 @@ impl BandState {
             return self.slot[blk] as usize;
         }
         let s = self.flags.len() / self.area;
+        if s == 0 {
+            // Room for every block at once: growing would copy the states made so far into
+            // fresh pages each time (pages never written cost nothing).
+            let all = self.slot.len() * self.area;
+            self.flags.reserve_exact(all);
+            self.low.reserve_exact(all);
+        }
         self.flags.resize((s + 1) * self.area, 0);
         self.low.resize((s + 1) * self.area, 0);
         self.slot[blk] = s as u32;
