@@ -11,7 +11,10 @@
 use super::bitplane::{BandState, StreamState};
 use super::resample::Folded;
 use super::schedule::Orient;
-use super::wavelet::{inverse, inverse_but_rows, inverse_row_into, low_size, splits, Kernel};
+use super::wavelet::{
+    inverse, inverse_but_rows, inverse_columns_window, inverse_row_into, low_size, splits, Kernel,
+    WINDOW_MARGIN,
+};
 use rayon::prelude::*;
 use std::borrow::Borrow;
 
@@ -202,8 +205,26 @@ fn channel_plane<B: Borrow<BandState>>(
     plane
 }
 
-/// The picture at level `stop` from each channel's bands, the channels in parallel.
-fn draw<B: Borrow<BandState> + Send>(src: &Source, stop: u32, bands: Vec<Vec<B>>) -> Vec<u8> {
+/// The picture at level `stop` from each channel's bands: at the image's size, by strips
+/// ([`draw_by_strips`]); at a coarser level, from whole planes.
+fn draw<B: Borrow<BandState> + Send + Sync>(
+    src: &Source,
+    stop: u32,
+    bands: Vec<Vec<B>>,
+) -> Vec<u8> {
+    if stop == 0 && src.levels > 0 {
+        return draw_by_strips(src, bands);
+    }
+    draw_planes(src, stop, bands)
+}
+
+/// The picture at level `stop` from each channel's bands, each channel's whole plane made
+/// first (the channels in parallel).
+pub(crate) fn draw_planes<B: Borrow<BandState> + Send>(
+    src: &Source,
+    stop: u32,
+    bands: Vec<Vec<B>>,
+) -> Vec<u8> {
     let stop = stop.min(src.levels);
     let (w, h) = low_size(src.width, src.height, stop);
     // The low-low band of level `stop` is an image of its own, of levels − stop levels.
@@ -216,6 +237,120 @@ fn draw<B: Borrow<BandState> + Send>(src: &Source, stop: u32, bands: Vec<Vec<B>>
         })
         .collect();
     interleave(src, stop, &planes, w, (levels > 0).then_some(src.kernel))
+}
+
+/// Picture rows drawn at a time by [`draw_by_strips`] (even, so that a strip starts with a
+/// low row).
+const STRIP_ROWS: usize = 32;
+
+/// The picture at the image's size without a whole plane per channel: each channel's low-low
+/// band of level 1 is made and inverse-transformed whole (a quarter of the picture), then the
+/// finest level is undone a strip of rows at a time, its rows read from the band states, and
+/// converted to pixels at once. The values are those of [`draw_planes`]: each strip's column
+/// synthesis runs on a window [`WINDOW_MARGIN`] rows wider on each side, and keeps only the
+/// rows that the window's own edges cannot reach. Strips in parallel.
+fn draw_by_strips<B: Borrow<BandState> + Send + Sync>(src: &Source, bands: Vec<Vec<B>>) -> Vec<u8> {
+    let (w, h) = (src.width, src.height);
+    let (w1, h1) = low_size(w, h, 1);
+    let within = |b: &B| {
+        let b = &b.borrow().band;
+        b.x0 + b.w <= w1 && b.y0 + b.h <= h1
+    };
+    let parts: Vec<(Vec<i32>, Vec<B>)> = (bands.into_par_iter().enumerate())
+        .map(|(c, bands)| {
+            let (coarse, fine): (Vec<B>, Vec<B>) = bands.into_iter().partition(within);
+            let mut low = channel_plane(src, c, coarse, w1, h1);
+            inverse(src.kernel, &mut low, w1, h1, src.levels - 1, 0);
+            (low, fine)
+        })
+        .collect();
+    let norm = Normalise::new(src, 0);
+    let mut out = vec![0u8; w * h * src.channels];
+    if w == 0 {
+        return out;
+    }
+    match parts.len() {
+        1 => strips::<1, B>(src.kernel, &parts, (w, h), norm, &mut out),
+        2 => strips::<2, B>(src.kernel, &parts, (w, h), norm, &mut out),
+        3 => strips::<3, B>(src.kernel, &parts, (w, h), norm, &mut out),
+        _ => strips::<4, B>(src.kernel, &parts, (w, h), norm, &mut out),
+    }
+    out
+}
+
+/// [`draw_by_strips`]'s strips, for `N` channels, each given as its inverse-transformed
+/// low-low band of level 1 and its bands of level 0.
+fn strips<const N: usize, B: Borrow<BandState> + Sync>(
+    kernel: Kernel,
+    parts: &[(Vec<i32>, Vec<B>)],
+    (w, h): (usize, usize),
+    norm: Normalise,
+    out: &mut [u8],
+) {
+    let (w1, h1) = low_size(w, h, 1);
+    let (nl, nh) = (h1, h - h1);
+    // Per thread: each channel's window of rows, the lifting's scratch row and the
+    // synthesised rows of a picture row.
+    let init = || (vec![Vec::new(); N], Vec::new(), vec![0i32; N * w]);
+    let strip_bytes = STRIP_ROWS * w * N;
+    (out.par_chunks_mut(strip_bytes).enumerate()).for_each_init(
+        init,
+        |(windows, tmp, row), (k, out)| {
+            let (y0, y1) = (k * STRIP_ROWS, (k * STRIP_ROWS + STRIP_ROWS).min(h));
+            // Rows a..b of each half make picture rows y0..y1; the window reaches past them.
+            let (a, b) = (y0 / 2, y1.div_ceil(2));
+            let lo = a.saturating_sub(WINDOW_MARGIN);
+            let (s_end, d_end) = ((b + WINDOW_MARGIN).min(nl), (b + WINDOW_MARGIN).min(nh));
+            let (ns, nd) = (s_end - lo, d_end.saturating_sub(lo));
+            for ((low, fine), win) in parts.iter().zip(windows.iter_mut()) {
+                win.resize((ns + nd) * w, 0);
+                let (s, d) = win.split_at_mut(ns * w);
+                for (i, r) in (lo..s_end).zip(s.chunks_exact_mut(w)) {
+                    level_zero_row(r, i, Some(&low[i * w1..(i + 1) * w1]), fine);
+                }
+                for (i, r) in (lo..d_end).zip(d.chunks_exact_mut(w)) {
+                    level_zero_row(r, h1 + i, None, fine);
+                }
+                inverse_columns_window(kernel, s, d, w);
+            }
+            for (y, out) in (y0..y1).zip(out.chunks_exact_mut(N * w)) {
+                // Picture row 2i is the low half's row i, 2i + 1 the high half's.
+                let at = if y % 2 == 0 {
+                    y / 2 - lo
+                } else {
+                    ns + (y - 1) / 2 - lo
+                };
+                let source = |c: usize| &windows[c][at * w..(at + 1) * w];
+                pixel_row::<N>(source, w, Some(kernel), norm, tmp, row, out);
+            }
+        },
+    );
+}
+
+/// Row `r` of a channel's plane of level 0 (the Mallat layout), from `lead` (its first
+/// values: the low-low band of level 1, if the row passes through it) and the bands of
+/// level 0 crossing it; zero where no band was decoded.
+fn level_zero_row<B: Borrow<BandState>>(
+    row: &mut [i32],
+    r: usize,
+    lead: Option<&[i32]>,
+    fine: &[B],
+) {
+    let crossing = || {
+        (fine.iter().map(Borrow::borrow))
+            .filter(move |b| (b.band.y0..b.band.y0 + b.band.h).contains(&r))
+    };
+    let covered = lead.map_or(0, <[i32]>::len) + crossing().map(|b| b.band.w).sum::<usize>();
+    if covered < row.len() {
+        row.fill(0);
+    }
+    if let Some(lead) = lead {
+        row[..lead.len()].copy_from_slice(lead);
+    }
+    for b in crossing() {
+        let x0 = b.band.x0;
+        b.row_values(r - b.band.y0, &mut row[x0..x0 + b.band.w], false);
+    }
 }
 
 /// A thumbnail of `tw × th` (informative): the picture with the bands finer than level
@@ -325,23 +460,7 @@ fn interleave(
             .enumerate()
             .for_each_init(init, |(tmp, row), (y, out)| {
                 let source = |c: usize| &planes[c][y * w..(y + 1) * w];
-                if let Some(kernel) = rows {
-                    for (c, r) in row.chunks_exact_mut(w).enumerate() {
-                        inverse_row_into(kernel, source(c), tmp, r);
-                    }
-                }
-                let mut coded = [[0i32; RUN]; N];
-                for (k, px) in out.chunks_mut(N * RUN).enumerate() {
-                    let (a, len) = (k * RUN, px.len() / N);
-                    for (c, v) in coded.iter_mut().enumerate() {
-                        let values = match rows {
-                            Some(_) => &row[c * w + a..c * w + a + len],
-                            None => &source(c)[a..a + len],
-                        };
-                        norm.apply(values, &mut v[..len]);
-                    }
-                    layout_run::<N>(&coded, px, norm.frac);
-                }
+                pixel_row::<N>(source, w, rows, norm, tmp, row, out);
             });
     }
     let norm = Normalise::new(src, level);
@@ -357,6 +476,38 @@ fn interleave(
         _ => pixels::<4>(planes, w, rows, norm, &mut out),
     }
     out
+}
+
+/// One picture row (`out`, `N` channels interleaved) from each channel's row of coded values
+/// (`source(c)`, `w` of them): synthesised first by `rows` (into `row`) if given, then
+/// normalised and converted a run of pixels at a time.
+#[inline]
+fn pixel_row<'a, const N: usize>(
+    source: impl Fn(usize) -> &'a [i32],
+    w: usize,
+    rows: Option<Kernel>,
+    norm: Normalise,
+    tmp: &mut Vec<i32>,
+    row: &mut [i32],
+    out: &mut [u8],
+) {
+    if let Some(kernel) = rows {
+        for (c, r) in row.chunks_exact_mut(w).enumerate() {
+            inverse_row_into(kernel, source(c), tmp, r);
+        }
+    }
+    let mut coded = [[0i32; RUN]; N];
+    for (k, px) in out.chunks_mut(N * RUN).enumerate() {
+        let (a, len) = (k * RUN, px.len() / N);
+        for (c, v) in coded.iter_mut().enumerate() {
+            let values = match rows {
+                Some(_) => &row[c * w + a..c * w + a + len],
+                None => &source(c)[a..a + len],
+            };
+            norm.apply(values, &mut v[..len]);
+        }
+        layout_run::<N>(&coded, px, norm.frac);
+    }
 }
 
 /// [`layout_values`] for a run of pixels (`out.len() / N` of them), in 32 bits when every
