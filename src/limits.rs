@@ -51,7 +51,7 @@ pub struct Limits {
     /// bound of what the decoder allocates, not counting the file's own bytes: 512 bytes per
     /// sample of the levels decoded, 8 per coefficient of a refinement decoded (width × height
     /// × channels), and twice the picture drawn (measured peaks are below it: 380–410 bytes per
-    /// sample, 4.0 per coefficient at the default quality and 5.4 for a lossless file, 1.0–1.6
+    /// sample, 1.4 per coefficient at the default quality and 5.2 for a lossless file, 1.0–1.6
     /// times the picture; MEASUREMENTS.md). A thumbnail holds much less than the account of its
     /// refinement. The default 4 GiB refuses no file of levels within the other defaults, and a
     /// refinement beyond about 140 megapixels of RGB (30 bytes a pixel: 24 for its coefficients,
