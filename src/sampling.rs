@@ -299,19 +299,19 @@ impl<'a> SourceImage<'a> {
 /// The prefix sums of `image − drawn` (`w × h`, `C` channels) into `sat`, `(w + 1) × (h + 1)`
 /// entries of `C`: row 0 and column 0 stay 0, every other entry is written. Row by row as
 /// slices, `C` fixed: indexing each entry cost 15% of an encode in bounds checks.
-fn residual_sums<const C: usize>(sat: &mut [i64], image: &[u8], drawn: &[u8], w: usize, h: usize) {
+fn residual_sums<const C: usize>(sat: &mut [i32], image: &[u8], drawn: &[u8], w: usize, h: usize) {
     let stride = (w + 1) * C;
     let rows = image.chunks_exact(w * C).zip(drawn.chunks_exact(w * C));
     for (y, (image, drawn)) in rows.enumerate().take(h) {
         let (above, below) = sat.split_at_mut((y + 1) * stride);
         let (above, below) = (&above[y * stride + C..], &mut below[C..stride]);
-        let mut row = [0i64; C];
+        let mut row = [0i32; C];
         let pixels = image.chunks_exact(C).zip(drawn.chunks_exact(C));
         let entries = below.chunks_exact_mut(C).zip(above.chunks_exact(C));
         for ((out, up), (p, r)) in entries.zip(pixels) {
             for k in 0..C {
-                row[k] += p[k] as i64 - r[k] as i64;
-                out[k] = up[k] + row[k];
+                row[k] = row[k].wrapping_add(p[k] as i32 - r[k] as i32);
+                out[k] = up[k].wrapping_add(row[k]);
             }
         }
     }
@@ -339,8 +339,10 @@ struct Fit<'a> {
     height: usize,
     /// Source pixels per fitted pixel.
     f: usize,
-    /// The residual's prefix sums, kept from one correction to the next.
-    sat: Vec<i64>,
+    /// The residual's prefix sums, kept from one correction to the next: modulo 2^32, as a
+    /// box's sum (at most 255 a pixel in magnitude over at most `FIT_PIXELS` pixels, below
+    /// 2^31) is exact from them with wrapping arithmetic.
+    sat: Vec<i32>,
 }
 
 impl<'a> Fit<'a> {
@@ -413,7 +415,9 @@ impl<'a> Fit<'a> {
             let n = ((x1 - x0) * (y1 - y0)) as f64;
             for (ch, v) in col.iter_mut().enumerate() {
                 let at = |x: usize, y: usize| sat[y * stride + x * c + ch];
-                let sum = at(x1, y1) + at(x0, y0) - at(x0, y1) - at(x1, y0);
+                let sum = (at(x1, y1).wrapping_add(at(x0, y0)))
+                    .wrapping_sub(at(x0, y1))
+                    .wrapping_sub(at(x1, y0));
                 *v = (*v as f64 + FIT_SHARE * sum as f64 / n)
                     .round()
                     .clamp(0.0, 255.0) as u8;
