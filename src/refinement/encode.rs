@@ -270,11 +270,10 @@ pub(crate) fn encode(
         Goal::Key(k) => (pass_limits(&layout, &PassLimit::Key(k)), PassLimit::Key(k)),
         Goal::Lossless | Goal::Bytes(_) => (all.clone(), PassLimit::Counts(vec![])),
     };
-    // The states copy their bands' coefficients: the planes go. The streams are coded in
-    // parallel, each state going once its stream is coded, the largest (the finest level's)
-    // first.
-    let states = layout.stream_states(Some(&planes));
-    drop(planes);
+    // The states copy their bands' coefficients, each plane going once copied. The streams
+    // are coded in parallel, each state going once its stream is coded, the largest (the
+    // finest level's) first.
+    let states = layout.stream_states_taking(planes);
     let mut streams: Vec<CodedStream> = (states.into_par_iter().zip(&limits).rev())
         .map(|(mut st, &n)| {
             let weights = pass_weights(&layout, frac, &st.passes);

@@ -70,6 +70,38 @@ impl Layout {
     /// The state of each stream, its bands' coefficients taken from `planes` (the encoder's
     /// transformed channels, Mallat layout) or zero (a decoder's).
     pub(crate) fn stream_states(&self, planes: Option<&[Vec<i32>]>) -> Vec<StreamState> {
+        self.states_with(|_, band, c| planes.map_or_else(Vec::new, |p| self.band_of(&p[c], band)))
+    }
+
+    /// [`Layout::stream_states`] from `planes`, each freed once its bands are copied (the
+    /// planes and the copies are never all held at once).
+    pub(crate) fn stream_states_taking(&self, planes: Vec<Vec<i32>>) -> Vec<StreamState> {
+        let all = self.bands();
+        let mut truths: Vec<Vec<Vec<i32>>> = vec![Vec::new(); all.len()];
+        for plane in planes {
+            for (t, band) in truths.iter_mut().zip(&all) {
+                t.push(self.band_of(&plane, band));
+            }
+        }
+        self.states_with(|bi, _, c| std::mem::take(&mut truths[bi][c]))
+    }
+
+    /// The coefficients of `band` in `plane`, row by row.
+    fn band_of(&self, plane: &[i32], band: &Band) -> Vec<i32> {
+        let mut t = Vec::with_capacity(band.len());
+        for y in band.y0..band.y0 + band.h {
+            let row = y * self.width;
+            t.extend_from_slice(&plane[row + band.x0..row + band.x0 + band.w]);
+        }
+        t
+    }
+
+    /// The state of each stream, the coefficients of band `bi` (`band`) of channel `c` from
+    /// `truth(bi, band, c)`.
+    fn states_with(
+        &self,
+        mut truth: impl FnMut(usize, &Band, usize) -> Vec<i32>,
+    ) -> Vec<StreamState> {
         let (classes, _) = channel_classes(self.channels);
         let all = self.bands();
         self.passes()
@@ -79,16 +111,8 @@ impl Layout {
                 let mut members = Vec::new();
                 let mut index = Vec::new();
                 for (bi, band) in all.iter().enumerate().filter(|(_, b)| b.stream == s as u32) {
-                    for c in 0..self.channels {
-                        let truth = planes.map_or_else(Vec::new, |p| {
-                            let mut t = Vec::with_capacity(band.len());
-                            for y in band.y0..band.y0 + band.h {
-                                let row = y * self.width;
-                                t.extend_from_slice(&p[c][row + band.x0..row + band.x0 + band.w]);
-                            }
-                            t
-                        });
-                        members.push((c as u8, BandState::new(*band, classes[c], truth)));
+                    for (c, &class) in classes.iter().enumerate().take(self.channels) {
+                        members.push((c as u8, BandState::new(*band, class, truth(bi, band, c))));
                         index.push(bi as u16);
                     }
                 }
