@@ -879,27 +879,6 @@ impl StreamState {
         let cols = BLOCK.min(band.band.w - x0);
         let rows = BLOCK.min(band.band.h - y0);
         let s = band.open(blk);
-        if let Some(u) = undo {
-            // One unit, its coefficients journalled first.
-            u.block = Some((blk, band.block_active[blk]));
-            let (stripe, x) = (cur.column / cols, x0 + cur.column % cols);
-            let ys = y0 + 4 * stripe;
-            let ye = (ys + 4).min(y0 + rows);
-            for y in ys..ye {
-                (u.coefficients).push((x, y, band.flags(s, x, y), band.mag_in(s, x, y)));
-            }
-            let col = Column::new(band, s, x, ys, ye);
-            match pass.kind {
-                PassKind::Propagation => propagate(band, sym, probs, tally, set, col, p)?,
-                PassKind::Refinement => refine(band, sym, probs, tally, set, col, p)?,
-                PassKind::Cleanup => clean(band, sym, probs, tally, set, col, p)?,
-            }
-            cur.column += 1;
-            if cur.column == cols * rows.div_ceil(4) {
-                return Some(next_block(band, cur));
-            }
-            return Some(Step::More);
-        }
         let block = BlockAt {
             s,
             x0,
@@ -907,39 +886,50 @@ impl StreamState {
             cols,
             rows,
         };
-        let left = if one { 1 } else { usize::MAX };
-        match pass.kind {
-            PassKind::Propagation => scan(
-                band,
-                sym,
-                probs,
-                tally,
-                cur,
-                block,
-                left,
-                |b, sym, pr, t, col| propagate(b, sym, pr, t, set, col, p),
-            ),
-            PassKind::Refinement => scan(
-                band,
-                sym,
-                probs,
-                tally,
-                cur,
-                block,
-                left,
-                |b, sym, pr, t, col| refine(b, sym, pr, t, set, col, p),
-            ),
-            PassKind::Cleanup => scan(
-                band,
-                sym,
-                probs,
-                tally,
-                cur,
-                block,
-                left,
-                |b, sym, pr, t, col| clean(b, sym, pr, t, set, col, p),
-            ),
+        if let Some(u) = undo {
+            // One unit (the decoder grants no more while journalling), journalled first.
+            journal(band, blk, block, cur.column, u);
         }
+        let left = if one { 1 } else { usize::MAX };
+        // One loop per pass kind, each with its column coder inlined.
+        macro_rules! scan_with {
+            ($code:ident) => {
+                scan(
+                    band,
+                    sym,
+                    probs,
+                    tally,
+                    cur,
+                    block,
+                    left,
+                    |b, sym, pr, t, col| $code(b, sym, pr, t, set, col, p),
+                )
+            };
+        }
+        match pass.kind {
+            PassKind::Propagation => scan_with!(propagate),
+            PassKind::Refinement => scan_with!(refine),
+            PassKind::Cleanup => scan_with!(clean),
+        }
+    }
+}
+
+/// Journals in `u` what coding stripe column `column` of `block` (block `blk`) may change.
+#[cold]
+#[inline(never)]
+fn journal(band: &BandState, blk: usize, block: BlockAt, column: usize, u: &mut Undo) {
+    let BlockAt {
+        s,
+        x0,
+        y0,
+        cols,
+        rows,
+    } = block;
+    u.block = Some((blk, band.block_active[blk]));
+    let (stripe, x) = (column / cols, x0 + column % cols);
+    let ys = y0 + 4 * stripe;
+    for y in ys..(ys + 4).min(y0 + rows) {
+        (u.coefficients).push((x, y, band.flags(s, x, y), band.mag_in(s, x, y)));
     }
 }
 
@@ -1033,13 +1023,6 @@ struct Column {
     ys: usize,
     ye: usize,
     at: usize,
-}
-
-impl Column {
-    fn new(band: &BandState, s: usize, x: usize, ys: usize, ye: usize) -> Column {
-        let at = band.at(s, x, ys);
-        Column { s, x, ys, ye, at }
-    }
 }
 
 /// The flags of a whole stripe column starting at `at`, OR-ed: what none of its
