@@ -72,7 +72,7 @@ impl Axis {
 /// zero) along one axis of `full` pixels and averaged over `dst` output pixels (an [`Axis`]
 /// at level 0), folded into taps over the low band's samples: what a thumbnail draws without
 /// making the image-size lines. Linear but for the lifting's roundings, which the taps leave
-/// out (they move an output by less than one coefficient unit).
+/// out (they move an output by at most two coefficient units).
 pub(crate) struct Folded {
     /// Per output pixel: the first of the low band's samples it weighs, and their weights
     /// in 1/2^FOLD_BITS.

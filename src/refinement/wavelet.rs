@@ -270,11 +270,8 @@ fn inverse_columns(
         for y in 0..rows {
             tmp.extend_from_slice(&plane[y * stride + x0..y * stride + x0 + sw]);
         }
-        let small = small(tmp);
         let (s, d) = tmp.split_at_mut(nl * sw);
-        for &(update, step) in steps(kernel).iter().rev() {
-            lift_rows(update, step, s, d, sw, -1, small);
-        }
+        inverse_columns_window(kernel, s, d, sw);
         for (k, row) in tmp.chunks_exact(sw).enumerate() {
             let y = if k < nl { 2 * k } else { 2 * (k - nl) + 1 };
             plane[y * stride + x0..y * stride + x0 + sw].copy_from_slice(row);
@@ -282,8 +279,6 @@ fn inverse_columns(
     }
 }
 
-/// The one-dimensional splits `levels` levels make of a `w × h` plane: a side of 1 is left
-/// as it is (a line shorter than 2 has no high half), so it adds no gain.
 /// Rows of each half that a window of one column split's inverse gets wrong next to an edge
 /// that is not the plane's (the steps read the other half's neighbours, clamped there):
 /// the 9/7's four steps spoil two, the 5/3's two one.
@@ -303,6 +298,8 @@ pub(crate) fn inverse_columns_window(kernel: Kernel, s: &mut [i32], d: &mut [i32
     }
 }
 
+/// The one-dimensional splits `levels` levels make of a `w × h` plane: a side of 1 is left
+/// as it is (a line shorter than 2 has no high half), so it adds no gain.
 pub(crate) fn splits(w: usize, h: usize, levels: u32) -> u32 {
     (0..levels)
         .map(|l| {
