@@ -245,6 +245,25 @@ impl<'a> SourceImage<'a> {
         self.fitted_within(sites, frame, first_level, total, FIT_PIXELS)
     }
 
+    /// [`SourceImage::fitted`] of an image needed no longer: the fit's table of residual sums
+    /// takes over the memory of the image's own, which it needs no more once the uncorrected
+    /// colours are taken (two such tables, 4 bytes a pixel and channel each, were the encoder's
+    /// peak).
+    pub(crate) fn into_fitted(
+        mut self,
+        sites: &[Site],
+        frame: Frame,
+        first_level: usize,
+        total: usize,
+    ) -> Vec<u8> {
+        let (colours, mut fit) = self.fit_start(sites, total, FIT_PIXELS);
+        let sat = std::mem::take(&mut self.sat);
+        if fit.f == 1 {
+            fit.sat = sat;
+        }
+        self.fit_levels(sites, frame, first_level, total, colours, fit)
+    }
+
     /// [`SourceImage::fitted`] comparing renders of at most `max_pixels` pixels.
     fn fitted_within(
         &self,
@@ -254,10 +273,28 @@ impl<'a> SourceImage<'a> {
         total: usize,
         max_pixels: usize,
     ) -> Vec<u8> {
-        let c = self.channels;
+        let (colours, fit) = self.fit_start(sites, total, max_pixels);
+        self.fit_levels(sites, frame, first_level, total, colours, fit)
+    }
+
+    /// The uncorrected colours of `sites`, and the picture renders are compared with.
+    fn fit_start(&self, sites: &[Site], total: usize, max_pixels: usize) -> (Vec<u8>, Fit<'a>) {
         let positions: Vec<Point> = sites.iter().map(|s| s.pos).collect();
-        let mut colours = self.colours(&positions, SampleColour::Progressive, total);
-        let mut fit = Fit::new(self, max_pixels);
+        let colours = self.colours(&positions, SampleColour::Progressive, total);
+        (colours, Fit::new(self, max_pixels))
+    }
+
+    /// `colours` corrected level by level against `fit`: the table of prefix sums is not read.
+    fn fit_levels(
+        &self,
+        sites: &[Site],
+        frame: Frame,
+        first_level: usize,
+        total: usize,
+        mut colours: Vec<u8>,
+        mut fit: Fit,
+    ) -> Vec<u8> {
+        let c = self.channels;
         let mut set = SampleSet::new(self.width as u32, self.height as u32, c).with_frame(frame);
         if set.channels() != c {
             return colours; // More than 4 channels: no renderer draws them.
@@ -355,7 +392,7 @@ struct Fit<'a> {
 }
 
 impl<'a> Fit<'a> {
-    fn new(src: &'a SourceImage<'a>, max_pixels: usize) -> Self {
+    fn new(src: &SourceImage<'a>, max_pixels: usize) -> Self {
         let (w, h) = (src.width, src.height);
         let f = (1..)
             .find(|f| w.div_ceil(*f) * h.div_ceil(*f) <= max_pixels.max(1))

@@ -5,7 +5,7 @@ use crate::coding::predictive::{Params, PredictiveEncoder};
 use crate::coding::raw;
 use crate::container::{Coding, Header};
 use crate::sampling::{SampleColour, SourceImage};
-use crate::sites::{fixed_position, Quasicrystal};
+use crate::sites::{fixed_position, Quasicrystal, Site};
 use crate::Result;
 
 /// Coded levels.
@@ -26,6 +26,41 @@ pub(crate) fn code(
     header: &Header,
     colour: SampleColour,
 ) -> Result<Levels> {
+    code_sites(seq, header, |sites, total| match colour {
+        SampleColour::Fitted => source.fitted(sites, seq.frame(), first_level(header), total),
+        rule => {
+            let positions: Vec<_> = sites.iter().map(|s| s.pos).collect();
+            source.colours(&positions, rule, total)
+        }
+    })
+}
+
+/// [`code`] for the last use of `source`: fitted colours reuse its memory
+/// ([`SourceImage::into_fitted`]).
+pub(crate) fn code_last(
+    source: SourceImage,
+    seq: &Quasicrystal,
+    header: &Header,
+    colour: SampleColour,
+) -> Result<Levels> {
+    if colour != SampleColour::Fitted {
+        return code(&source, seq, header, colour);
+    }
+    code_sites(seq, header, |sites, total| {
+        source.into_fitted(sites, seq.frame(), first_level(header), total)
+    })
+}
+
+fn first_level(header: &Header) -> usize {
+    usize::try_from(header.first_level).unwrap_or(usize::MAX)
+}
+
+/// The levels of `header` whose colours `colours(sites, total)` gives.
+fn code_sites(
+    seq: &Quasicrystal,
+    header: &Header,
+    colours: impl FnOnce(&[Site], usize) -> Vec<u8>,
+) -> Result<Levels> {
     let n = header.total_samples as usize;
     let channels = header.layout.channels() as usize;
     let sites = seq.first(n);
@@ -34,16 +69,7 @@ pub(crate) fn code(
         .iter()
         .map(|s| fixed_position(&frame, s.lattice))
         .collect();
-    let colours = match colour {
-        SampleColour::Fitted => {
-            let first = usize::try_from(header.first_level).unwrap_or(usize::MAX);
-            source.fitted(&sites, frame, first, n)
-        }
-        rule => {
-            let positions: Vec<_> = sites.iter().map(|s| s.pos).collect();
-            source.colours(&positions, rule, n)
-        }
-    };
+    let colours = colours(&sites, n);
     let mut predictive = match header.coding {
         Coding::Predictive { step } => Some(PredictiveEncoder::new(
             Params { step },

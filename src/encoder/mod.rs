@@ -240,8 +240,7 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         });
     }
     let source = SourceImage::new(&pixels, width, height, channels)?;
-    let levels = levels::code(&source, &seq, &header, opts.colour)?;
-    drop(source);
+    let levels = levels::code_last(source, &seq, &header, opts.colour)?;
     let mut w = ContainerWriter::new(writer, &header)?;
     for (k, payload) in levels.payloads.iter().enumerate() {
         w.write_level(payload)?;
