@@ -551,7 +551,11 @@ mod tests {
         let src = SourceImage::new(img.as_raw(), w, h, 3).unwrap();
         let progressive = src.colours(&pos, SampleColour::Progressive, n);
         let half = src.fitted_within(&sites, seq.frame(), 127, n, 75 * 50);
-        assert_ne!(half, src.fitted(&sites, seq.frame(), 127, n));
+        let full = src.fitted(&sites, seq.frame(), 127, n);
+        assert_ne!(half, full);
+        // The encoder's way, the residual sums in the image's table: the same colours.
+        let own = SourceImage::new(img.as_raw(), w, h, 3).unwrap();
+        assert_eq!(own.into_fitted(&sites, seq.frame(), 127, n), full);
         let mse = |colours: &[u8], e: usize| {
             let mut set = SampleSet::new(w, h, 3).with_frame(seq.frame());
             for (s, c) in sites[..e].iter().zip(colours.chunks_exact(3)) {
