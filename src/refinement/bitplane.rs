@@ -183,6 +183,9 @@ pub(crate) struct BandState {
     /// part of its state; the rest is never coded).
     stride: usize,
     area: usize,
+    /// The block's interior in its state, `stride − 2` by `area / stride − 2` (0 if none):
+    /// the coefficients whose 8 neighbours are all in it ([`BandState::within`]).
+    inner: (usize, usize),
     flags: Vec<Flags>,
     low: Vec<u16>,
     /// The magnitude bits from 2^16 up, row-major over the band (empty until the first).
@@ -208,6 +211,10 @@ impl BandState {
             slot: vec![UNOPENED; bw * bh],
             stride: BLOCK.min(band.w),
             area: BLOCK.min(band.w) * BLOCK.min(band.h),
+            inner: (
+                BLOCK.min(band.w).saturating_sub(2),
+                BLOCK.min(band.h).saturating_sub(2),
+            ),
             flags: Vec::new(),
             low: Vec::new(),
             high: Vec::new(),
@@ -303,7 +310,7 @@ impl BandState {
     /// block's state too (those past the band's edge are never coded, nor significant).
     #[inline(always)]
     fn within(&self, lx: usize, ly: usize) -> bool {
-        (1..self.stride - 1).contains(&lx) && (1..self.area / self.stride - 1).contains(&ly)
+        lx.wrapping_sub(1) < self.inner.0 && ly.wrapping_sub(1) < self.inner.1
     }
 
     /// The flags of coefficient (x, y), whose block has state `s`.
@@ -368,7 +375,12 @@ impl BandState {
 
     #[inline(always)]
     fn set_mag(&mut self, s: usize, x: usize, y: usize, m: u32) {
-        let i = self.at(s, x, y);
+        self.set_mag_at(self.at(s, x, y), x, y, m)
+    }
+
+    /// [`BandState::set_mag`] of the coefficient at `at` ([`BandState::at`]).
+    #[inline(always)]
+    fn set_mag_at(&mut self, i: usize, x: usize, y: usize, m: u32) {
         self.low[i] = m as u16;
         if m >> 16 != 0 || !self.high.is_empty() {
             if self.high.is_empty() {
@@ -383,14 +395,12 @@ impl BandState {
     pub(crate) fn value(&self, x: usize, y: usize) -> i32 {
         match self.slot[self.block_of(x, y)] {
             UNOPENED => 0,
-            s => self.value_in(s as usize, x, y),
+            s => Self::value_of(
+                self.flags(s as usize, x, y),
+                self.mag_in(s as usize, x, y),
+                self.current,
+            ),
         }
-    }
-
-    /// [`BandState::value`] of coefficient (x, y), whose block has state `s`.
-    #[inline(always)]
-    fn value_in(&self, s: usize, x: usize, y: usize) -> i32 {
-        Self::value_of(self.flags(s, x, y), self.mag_in(s, x, y), self.current)
     }
 
     /// Row `y`'s reconstructed values into `out` (the band's width): added to it (wrapping)
@@ -444,13 +454,13 @@ impl BandState {
         })
     }
 
-    /// Marks coefficient (x, y) of block state `s`, just made significant, in its
+    /// Marks coefficient (x, y), at `at` in its block's state, just made significant, in its
     /// neighbours' patterns (those in blocks with no state learn it when they get one).
     #[inline(always)]
-    fn tell_neighbours(&mut self, s: usize, x: usize, y: usize) {
+    fn tell_neighbours(&mut self, at: usize, x: usize, y: usize) {
         let (lx, ly) = (x % BLOCK, y % BLOCK);
         if self.within(lx, ly) {
-            let (i, stride) = (self.at(s, x, y) as isize, self.stride as isize);
+            let (i, stride) = (at as isize, self.stride as isize);
             for &(dx, dy, bit) in &TELLS {
                 self.flags[(i + dy * stride + dx) as usize] |= (bit as Flags) << NEIGHBOURS;
             }
@@ -486,12 +496,12 @@ impl BandState {
     /// The sign context of coefficient (x, y) from its horizontal and vertical neighbours,
     /// and whether the sign is coded flipped.
     #[inline(always)]
-    fn sign_context(&self, s: usize, x: usize, y: usize) -> (usize, bool) {
+    fn sign_context(&self, at: usize, x: usize, y: usize) -> (usize, bool) {
         let (lx, ly) = (x % BLOCK, y % BLOCK);
         let within = self.within(lx, ly);
         // Left, right, up, down.
         let [l, r, u, d] = if within {
-            let (i, stride) = (self.at(s, x, y), self.stride);
+            let (i, stride) = (at, self.stride);
             let f = &self.flags;
             [f[i - 1], f[i + 1], f[i - stride], f[i + stride]]
         } else {
@@ -980,7 +990,6 @@ fn scan<S: Symbols, T: Tally>(
             }
             left -= 1;
             let col = Column {
-                s,
                 x: x0 + dx,
                 ys,
                 ye,
@@ -1014,11 +1023,10 @@ fn parity(p: u32) -> Flags {
     }
 }
 
-/// A stripe column being coded: column `x`, rows `ys..ye`, of the block with state `s`; its
-/// first coefficient is at `at` in the band's state ([`BandState::at`]).
+/// A stripe column being coded: column `x`, rows `ys..ye`; its first coefficient is at `at`
+/// in the band's state ([`BandState::at`]).
 #[derive(Clone, Copy)]
 struct Column {
-    s: usize,
     x: usize,
     ys: usize,
     ye: usize,
@@ -1042,13 +1050,7 @@ fn propagate<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    Column {
-        s,
-        x,
-        ys,
-        ye,
-        at: l0,
-    }: Column,
+    Column { x, ys, ye, at: l0 }: Column,
     p: u32,
 ) -> Option<()> {
     // No coefficient with a significant neighbour: nothing to code.
@@ -1064,7 +1066,7 @@ fn propagate<S: Symbols, T: Tally>(
             let n = (f >> NEIGHBOURS) as u8;
             if n != 0 {
                 let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n as usize] as usize;
-                code_significance(band, sym, probs, tally, (s, x, y), p, ctx, set)?;
+                code_significance(band, sym, probs, tally, (at, x, y), p, ctx, set)?;
                 band.flags[at] |= VISITED;
             }
         }
@@ -1080,13 +1082,7 @@ fn refine<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    Column {
-        s,
-        x,
-        ys,
-        ye,
-        at: l0,
-    }: Column,
+    Column { x, ys, ye, at: l0 }: Column,
     p: u32,
 ) -> Option<()> {
     // No significant coefficient: nothing to code.
@@ -1112,7 +1108,7 @@ fn refine<S: Symbols, T: Tally>(
             if p < 16 {
                 band.low[at] |= (bit as u16) << p;
             } else {
-                band.set_mag(s, x, y, band.mag_in(s, x, y) | (bit as u32) << p);
+                band.set_mag_at(at, x, y, band.mag_at(at, x, y) | (bit as u32) << p);
             }
             let g = (f & !ODD) | REFINED | parity(p);
             band.flags[at] = g;
@@ -1133,13 +1129,7 @@ fn clean<S: Symbols, T: Tally>(
     probs: &mut [Prob],
     tally: &mut T,
     set: usize,
-    Column {
-        s,
-        x,
-        ys,
-        ye,
-        at: l0,
-    }: Column,
+    Column { x, ys, ye, at: l0 }: Column,
     p: u32,
 ) -> Option<()> {
     let orient = band.band.orient as usize;
@@ -1168,11 +1158,12 @@ fn clean<S: Symbols, T: Tally>(
                 let hi = sym.code(probs, set + CTX_UNI, k & 2 != 0)?;
                 let lo = sym.code(probs, set + CTX_UNI + 1, k & 1 != 0)?;
                 let yy = ys + 2 * hi as usize + lo as usize;
-                let (sc, flip) = band.sign_context(s, x, yy);
+                let at = l0 + (yy - ys) * stride;
+                let (sc, flip) = band.sign_context(at, x, yy);
                 let i = yy * band.band.w + x;
                 let neg_truth = S::ENCODES && band.truth[i] < 0;
                 let neg = sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
-                make_significant(band, tally, (s, x, yy), p, neg);
+                make_significant(band, tally, (at, x, yy), p, neg);
                 y = yy + 1;
             } else {
                 y = ye;
@@ -1180,11 +1171,12 @@ fn clean<S: Symbols, T: Tally>(
         }
     }
     while y < ye {
-        let f = band.flags[l0 + (y - ys) * stride];
+        let at = l0 + (y - ys) * stride;
+        let f = band.flags[at];
         if f & (SIG | VISITED) == 0 {
             let n = (f >> NEIGHBOURS) as usize;
             let ctx = set + CTX_SIG + SIG_CONTEXT[orient][n] as usize;
-            code_significance(band, sym, probs, tally, (s, x, y), p, ctx, set)?;
+            code_significance(band, sym, probs, tally, (at, x, y), p, ctx, set)?;
         }
         y += 1;
     }
@@ -1205,7 +1197,7 @@ fn code_significance<S: Symbols, T: Tally>(
     sym: &mut S,
     probs: &mut [Prob],
     tally: &mut T,
-    (s, x, y): (usize, usize, usize),
+    (at, x, y): (usize, usize, usize),
     p: u32,
     ctx: usize,
     set: usize,
@@ -1213,10 +1205,10 @@ fn code_significance<S: Symbols, T: Tally>(
     let i = y * band.band.w + x;
     let truth = S::ENCODES && (band.truth[i].unsigned_abs() >> p) & 1 != 0;
     if sym.code(probs, ctx, truth)? {
-        let (sc, flip) = band.sign_context(s, x, y);
+        let (sc, flip) = band.sign_context(at, x, y);
         let neg_truth = S::ENCODES && band.truth[i] < 0;
         let neg = sym.code(probs, set + CTX_SIGN + sc, neg_truth ^ flip)? ^ flip;
-        make_significant(band, tally, (s, x, y), p, neg);
+        make_significant(band, tally, (at, x, y), p, neg);
     }
     Some(())
 }
@@ -1225,20 +1217,23 @@ fn code_significance<S: Symbols, T: Tally>(
 fn make_significant<T: Tally>(
     band: &mut BandState,
     tally: &mut T,
-    (s, x, y): (usize, usize, usize),
+    (at, x, y): (usize, usize, usize),
     p: u32,
     neg: bool,
 ) {
-    let f = band.flags_mut(s, x, y);
+    let f = &mut band.flags[at];
     *f = (*f & !ODD) | SIG | if neg { NEG } else { 0 } | parity(p);
-    band.tell_neighbours(s, x, y);
-    band.set_mag(s, x, y, 1 << p);
+    band.tell_neighbours(at, x, y);
+    band.set_mag_at(at, x, y, 1 << p);
     let blk = band.block_of(x, y);
     band.block_active[blk] = true;
     band.band_active = true;
     if T::COUNTS {
         let t = band.truth[y * band.band.w + x] as i64;
-        tally.gain(t, t - band.value_in(s, x, y) as i64);
+        tally.gain(
+            t,
+            t - BandState::value_of(band.flags[at], band.mag_at(at, x, y), band.current) as i64,
+        );
     }
 }
 
