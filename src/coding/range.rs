@@ -50,6 +50,7 @@ const TOP: u32 = 1 << 24;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Prob {
     p: u16,
+    /// Updates so far, up to 8.
     n: u8,
 }
 
@@ -70,10 +71,11 @@ impl Prob {
 
     /// Adapts to an observed bit. `p` stays within `1..=4095`.
     pub fn update(&mut self, bit: bool) {
-        let shift = (1 + self.n as u32 / 2).min(5);
+        // `n` stops at 8, where the shift reaches 5: no minimum to take.
+        let shift = 1 + self.n as u32 / 2;
         let (down, up) = (self.p >> shift, (PROB_ONE - self.p) >> shift);
         self.p = if bit { self.p - down } else { self.p + up };
-        self.n = self.n.saturating_add(1).min(16);
+        self.n += (self.n < 8) as u8;
     }
 }
 

@@ -544,6 +544,9 @@ pub(crate) trait Symbols {
     /// Codes `bit` (encoder) or decodes one (decoder; `None` when the bytes so far do not
     /// decide it) with the probability `probs[ctx]`, which then adapts.
     fn code(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> Option<bool>;
+    /// [`Symbols::code`] where the bytes are known to decide the bit (a unit coded
+    /// unjournalled: [`Mode::Block`] or [`Mode::Unit`]).
+    fn code_sure(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> bool;
     /// Called before each unit (or block): how it is coded.
     fn begin_unit(&mut self) -> Mode {
         Mode::Block
@@ -578,8 +581,32 @@ impl Symbols for Encoding {
     const ENCODES: bool = true;
     #[inline(always)]
     fn code(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> Option<bool> {
+        Some(self.code_sure(probs, ctx, bit))
+    }
+    #[inline(always)]
+    fn code_sure(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> bool {
         self.enc.encode(&mut probs[ctx], bit);
-        Some(bit)
+        bit
+    }
+}
+
+/// A coder in a unit coded unjournalled ([`Mode::Block`], [`Mode::Unit`]): every decision is
+/// decided, so the passes' checks for running out of bytes fold away.
+struct Sure<'s, S>(&'s mut S);
+
+impl<S: Symbols> Symbols for Sure<'_, S> {
+    const ENCODES: bool = S::ENCODES;
+    #[inline(always)]
+    fn code(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> Option<bool> {
+        Some(self.0.code_sure(probs, ctx, bit))
+    }
+    #[inline(always)]
+    fn code_sure(&mut self, probs: &mut [Prob], ctx: usize, bit: bool) -> bool {
+        self.0.code_sure(probs, ctx, bit)
+    }
+    #[inline(always)]
+    fn more_units(&mut self) -> usize {
+        self.0.more_units()
     }
 }
 
@@ -624,11 +651,13 @@ impl Symbols for Decoding<'_> {
     const ENCODES: bool = false;
     #[inline(always)]
     fn code(&mut self, probs: &mut [Prob], ctx: usize, _bit: bool) -> Option<bool> {
-        if !self.careful {
-            return Some(self.dec.decode_fast(&mut probs[ctx], self.bytes));
-        }
         self.journal.push((ctx, probs[ctx]));
         self.dec.decode(&mut probs[ctx], self.bytes, usize::MAX)
+    }
+
+    #[inline(always)]
+    fn code_sure(&mut self, probs: &mut [Prob], ctx: usize, _bit: bool) -> bool {
+        self.dec.decode_fast(&mut probs[ctx], self.bytes)
     }
 
     #[inline(always)]
@@ -795,7 +824,7 @@ impl StreamState {
                 undo.current = b.current;
                 self.step(sym, tally, true, Some(&mut undo))
             } else {
-                self.step(sym, tally, mode == Mode::Unit, None)
+                self.step(&mut Sure(sym), tally, mode == Mode::Unit, None)
             };
             match done {
                 Some(Step::More) => {}
