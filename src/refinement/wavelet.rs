@@ -91,14 +91,36 @@ fn lift_1d(update: bool, step: Step, s: &mut [i32], d: &mut [i32], sign: i32, sm
 /// [`small`], so every row is within those bounds and none is checked.
 #[inline(always)]
 fn lift_row(step: Step, target: &mut [i32], a: &[i32], b: &[i32], sign: i32, small: bool) {
+    // A loop each way: multiplying by the sign cost a vector multiply a value.
+    if sign > 0 {
+        lift_row_signed::<true>(step, target, a, b, small)
+    } else {
+        lift_row_signed::<false>(step, target, a, b, small)
+    }
+}
+
+/// [`lift_row`] adding (`ADD`) or subtracting.
+#[inline(always)]
+fn lift_row_signed<const ADD: bool>(
+    step: Step,
+    target: &mut [i32],
+    a: &[i32],
+    b: &[i32],
+    small: bool,
+) {
+    let put = |t: &mut i32, v: i32| {
+        *t = if ADD {
+            t.wrapping_add(v)
+        } else {
+            t.wrapping_sub(v)
+        }
+    };
     if let Step::Fixed(c) = step {
         // |c| < 2^13, so c·(a + b) + 2048 stays within 32 bits when |a + b| ≤ 2^18.
-        let fast = |x: i32, y: i32| {
-            sign.wrapping_mul(c.wrapping_mul(x.wrapping_add(y)).wrapping_add(2048) >> 12)
-        };
+        let fast = |x: i32, y: i32| c.wrapping_mul(x.wrapping_add(y)).wrapping_add(2048) >> 12;
         if small {
             for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
-                *t = t.wrapping_add(fast(x, y));
+                put(t, fast(x, y));
             }
             return;
         }
@@ -107,17 +129,17 @@ fn lift_row(step: Step, target: &mut [i32], a: &[i32], b: &[i32], sign: i32, sma
             let s = x.wrapping_add(y);
             // At least |s| − 1 and |x| − 1: under 2^18 if both are at most 2^18.
             bits |= (s ^ (s >> 31)) as u32 | (x ^ (x >> 31)) as u32;
-            *t = t.wrapping_add(fast(x, y));
+            put(t, fast(x, y));
         }
         if bits < 1 << 18 {
             return;
         }
         for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
-            *t = t.wrapping_sub(fast(x, y));
+            put(t, fast(x, y).wrapping_neg());
         }
     }
     for ((t, &x), &y) in target.iter_mut().zip(a).zip(b) {
-        *t = t.wrapping_add(sign.wrapping_mul(step.delta(x, y)));
+        put(t, step.delta(x, y));
     }
 }
 
