@@ -74,7 +74,9 @@ impl Prob {
         // `n` stops at 8, where the shift reaches 5: no minimum to take.
         let shift = 1 + self.n as u32 / 2;
         let (down, up) = (self.p >> shift, (PROB_ONE - self.p) >> shift);
-        self.p = if bit { self.p - down } else { self.p + up };
+        // Masks, not a jump on the bit (see `RangeDecoder::decode_fast`).
+        let mask = (bit as u16).wrapping_neg();
+        self.p = self.p.wrapping_add(up & !mask).wrapping_sub(down & mask);
         self.n += (self.n < 8) as u8;
     }
 }
@@ -320,10 +322,12 @@ impl RangeDecoder {
     #[inline(always)]
     pub(crate) fn decode_fast(&mut self, p: &mut Prob, bytes: &[u8]) -> bool {
         let bound = (self.range >> PROB_BITS) * p.p as u32;
-        // Selects rather than branches: the bit is as hard to predict as the data.
+        // Masks rather than branches: the bit is as hard to predict as the data (a
+        // refinement bit is nearly a coin toss), and the compiler turned selects into a jump.
         let bit = self.lo >= bound;
-        self.lo -= if bit { bound } else { 0 };
-        self.range = if bit { self.range - bound } else { bound };
+        let mask = (bit as u32).wrapping_neg();
+        self.lo -= bound & mask;
+        self.range = bound.wrapping_add(self.range.wrapping_sub(bound.wrapping_mul(2)) & mask);
         while self.range < TOP {
             self.range <<= 8;
             self.lo = (self.lo << 8) | bytes[self.pos] as u32;
