@@ -137,12 +137,10 @@ impl RangeEncoder {
     /// Codes `bit` with probability `p` (then adapts `p`).
     pub fn encode(&mut self, p: &mut Prob, bit: bool) {
         let bound = (self.range >> PROB_BITS) * p.p as u32;
-        if bit {
-            self.low += bound as u64;
-            self.range -= bound;
-        } else {
-            self.range = bound;
-        }
+        // Masks, not a jump on the bit (see `RangeDecoder::decode_fast`).
+        let mask = (bit as u32).wrapping_neg();
+        self.low += (bound & mask) as u64;
+        self.range = bound.wrapping_add(self.range.wrapping_sub(bound.wrapping_mul(2)) & mask);
         p.update(bit);
         while self.range < TOP {
             self.range <<= 8;
