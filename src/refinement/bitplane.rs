@@ -199,6 +199,9 @@ pub(crate) struct BandState {
     order: Vec<(u32, u32)>,
     /// Encoder only: the coefficients being coded.
     pub truth: Vec<i32>,
+    /// Encoder only: per block (row-major), the OR of its coefficients' magnitudes (the
+    /// bit-planes where any of them has a 1), and the same over the band.
+    truth_bits: (Vec<u32>, u32),
 }
 
 impl BandState {
@@ -222,6 +225,7 @@ impl BandState {
             block_active: vec![false; bw * bh],
             band_active: false,
             order: block_order(&band),
+            truth_bits: truth_bits(&band, &truth),
             truth,
         }
     }
@@ -1269,18 +1273,29 @@ fn make_significant<T: Tally>(
 /// Encoder: whether a coefficient of a block that has no significant one (it is not active)
 /// becomes significant at `p`.
 fn block_has_new(band: &BandState, bx: u32, by: u32, p: u32) -> bool {
-    let x0 = bx as usize * BLOCK;
-    let y0 = by as usize * BLOCK;
-    let x1 = (x0 + BLOCK).min(band.band.w);
-    (y0..(y0 + BLOCK).min(band.band.h)).any(|y| {
-        let row = &band.truth[y * band.band.w + x0..y * band.band.w + x1];
-        row.iter().any(|t| (t.unsigned_abs() >> p) & 1 != 0)
-    })
+    (band.truth_bits.0[by as usize * band.bw + bx as usize] >> p) & 1 != 0
 }
 
 /// Encoder: whether any coefficient of a band without significant ones becomes significant.
 fn band_has_new(band: &BandState, p: u32) -> bool {
-    band.truth.iter().any(|&t| (t.unsigned_abs() >> p) & 1 != 0)
+    (band.truth_bits.1 >> p) & 1 != 0
+}
+
+/// [`BandState::truth_bits`] of `truth` (empty: the decoder's, none).
+fn truth_bits(band: &Band, truth: &[i32]) -> (Vec<u32>, u32) {
+    if truth.is_empty() {
+        return (Vec::new(), 0);
+    }
+    let (bw, bh) = band.blocks();
+    let mut blocks = vec![0u32; bw * bh];
+    for (y, row) in truth.chunks_exact(band.w).enumerate() {
+        let ors = &mut blocks[(y / BLOCK) * bw..][..bw];
+        for (o, run) in ors.iter_mut().zip(row.chunks(BLOCK)) {
+            *o |= run.iter().fold(0, |b, t| b | t.unsigned_abs());
+        }
+    }
+    let all = blocks.iter().fold(0, |b, &o| b | o);
+    (blocks, all)
 }
 
 #[cfg(test)]
@@ -1316,6 +1331,33 @@ mod tests {
             assert_eq!(b.low.len(), b.flags.len());
             if w <= BLOCK && h <= BLOCK {
                 assert_eq!(b.flags.len(), band.len());
+            }
+        }
+    }
+
+    /// The encoder's block and band flags from the kept ORs: what a scan of the coefficients
+    /// says, for every block and bit-plane of bands with partial blocks.
+    #[test]
+    fn new_significance_is_read_from_the_ors() {
+        let mut next = crate::testing::xorshift(7);
+        for (w, h) in [(1, 1), (33, 70), (64, 64), (100, 7)] {
+            let band = Band::sized(w, h);
+            let truth: Vec<i32> = (0..w * h)
+                .map(|_| ((next() % 2000) as i32 - 1000) >> (next() % 9))
+                .collect();
+            let b = BandState::new(band, 0, truth.clone());
+            let (bw, bh) = band.blocks();
+            for p in 0..12 {
+                let bit = |t: &i32| (t.unsigned_abs() >> p) & 1 != 0;
+                assert_eq!(band_has_new(&b, p), truth.iter().any(bit));
+                for (bx, by) in (0..bh).flat_map(|y| (0..bw).map(move |x| (x, y))) {
+                    let scan = (0..h).filter(|y| y / BLOCK == by).any(|y| {
+                        (0..w)
+                            .filter(|x| x / BLOCK == bx)
+                            .any(|x| bit(&truth[y * w + x]))
+                    });
+                    assert_eq!(block_has_new(&b, bx as u32, by as u32, p), scan);
+                }
             }
         }
     }
