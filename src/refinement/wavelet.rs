@@ -195,8 +195,16 @@ fn forward_row(kernel: Kernel, row: &mut [i32], tmp: &mut Vec<i32>) {
     }
     let nl = n.div_ceil(2);
     tmp.clear();
-    tmp.extend(row.iter().step_by(2));
-    tmp.extend(row.iter().skip(1).step_by(2));
+    tmp.resize(n, 0);
+    let (s, d) = tmp.split_at_mut(nl);
+    // Even samples to the low half, odd ones to the high half, a pair at a time.
+    for ((a, b), pair) in s.iter_mut().zip(d.iter_mut()).zip(row.chunks_exact(2)) {
+        *a = pair[0];
+        *b = pair[1];
+    }
+    if n % 2 == 1 {
+        s[nl - 1] = row[n - 1];
+    }
     let small = small(tmp);
     let (s, d) = tmp.split_at_mut(nl);
     for &(update, step) in steps(kernel) {
