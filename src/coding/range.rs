@@ -377,6 +377,37 @@ impl RangeDecoder {
 mod tests {
     use super::*;
 
+    /// The update as spec/format.md writes it (`k = min(1 + n/2, 5)`, `n = min(n + 1, 16)`,
+    /// a branch on the bit), against [`Prob::update`] (count stopped at 8, masks): every
+    /// probability, every count, both bits, and then long runs, give the same probabilities.
+    #[test]
+    fn update_is_the_spec_s() {
+        let spec = |p: u16, n: u8, bit: bool| -> (u16, u8) {
+            let k = (1 + n as u32 / 2).min(5);
+            let p = if bit { p - (p >> k) } else { p + ((4096 - p) >> k) };
+            (p, (n + 1).min(16))
+        };
+        for p0 in 1..4096u16 {
+            for n in 0..=16u8 {
+                for bit in [false, true] {
+                    let mut q = Prob { p: p0, n: n.min(8) };
+                    q.update(bit);
+                    assert_eq!(q.p, spec(p0, n, bit).0, "p {p0} n {n} bit {bit}");
+                }
+            }
+        }
+        let mut seed = 3u64;
+        for _ in 0..200 {
+            let (mut q, mut s) = (Prob::default(), (2048u16, 0u8));
+            for _ in 0..40 {
+                let bit = lcg(&mut seed) & 1 == 1;
+                q.update(bit);
+                s = spec(s.0, s.1, bit);
+                assert_eq!(q.p, s.0);
+            }
+        }
+    }
+
     fn lcg(s: &mut u64) -> u32 {
         *s = s
             .wrapping_mul(6364136223846793005)
