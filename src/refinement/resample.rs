@@ -202,19 +202,7 @@ mod tests {
 
     /// The spec's rule as written (§8): each output pixel the rounded mean under the products
     /// of the two axes' weights.
-    #[allow(clippy::too_many_arguments)]
-    fn resample_by_products(
-        pixels: &[u8],
-        sw: usize,
-        sh: usize,
-        channels: usize,
-        level: u32,
-        (width, height): (usize, usize),
-        dw: usize,
-        dh: usize,
-    ) -> Vec<u8> {
-        let ax = Axis::new(sw, dw, width, level);
-        let ay = Axis::new(sh, dh, height, level);
+    fn by_products(pixels: &[u8], sw: usize, channels: usize, ax: &Axis, ay: &Axis) -> Vec<u8> {
         let mut out = Vec::new();
         for ty in &ay.taps {
             for tx in &ax.taps {
@@ -248,7 +236,13 @@ mod tests {
             let full = (sw << level, sh << level);
             assert_eq!(
                 resample(&px, sw, sh, c, level, full, dw, dh),
-                resample_by_products(&px, sw, sh, c, level, full, dw, dh),
+                by_products(
+                    &px,
+                    sw,
+                    c,
+                    &Axis::new(sw, dw, full.0, level),
+                    &Axis::new(sh, dh, full.1, level)
+                ),
                 "{sw}x{sh}x{c} level {level} to {dw}x{dh}"
             );
         }
