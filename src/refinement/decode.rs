@@ -115,26 +115,13 @@ impl RefinementDecoder {
         }
     }
 
-    /// The deepest transform level whose low-low band is at least `width × height`.
-    fn level_at_least(&self, width: usize, height: usize) -> u32 {
-        (0..=self.layout.levels)
-            .rev()
-            .find(|&k| {
-                let (lw, lh) = low_size(self.layout.width, self.layout.height, k);
-                lw >= width && lh >= height
-            })
-            .unwrap_or(0)
-    }
-
     /// The streams a picture of transform level `level` draws on.
     fn streams_for(&self, level: u32) -> usize {
         (self.layout.levels - level.min(self.layout.levels)) as usize + 1
     }
 
-    /// The level whose bands a thumbnail decodes (the finer bands are taken as zero): the
-    /// deepest whose low-low band is at least twice the thumbnail's size.
     fn thumbnail_level(&self, width: u32, height: u32) -> u32 {
-        self.level_at_least(2 * width as usize, 2 * height as usize)
+        thumbnail_level(&self.layout, width as usize, height as usize)
     }
 
     /// Advances the first `n` streams over the bytes received.
@@ -200,6 +187,20 @@ impl RefinementDecoder {
     }
 }
 
+/// The transform level whose bands a `width × height` thumbnail of `layout` decodes (the finer
+/// bands are taken as zero): the deepest whose low-low band is at least twice the thumbnail on
+/// each side, less a pixel. The pixel is a rounding's: a 4000 × 3000 photo's 1/16 thumbnail is
+/// 250 × 188 (187.5 rounded up), and its level-3 band, 500 × 375, is as good as twice that.
+fn thumbnail_level(layout: &Layout, width: usize, height: usize) -> u32 {
+    (0..=layout.levels)
+        .rev()
+        .find(|&k| {
+            let (lw, lh) = low_size(layout.width, layout.height, k);
+            2 * width <= lw + 1 && 2 * height <= lh + 1
+        })
+        .unwrap_or(0)
+}
+
 /// What a picture of `layout` is drawn from, but the streams.
 fn source<'a>(layout: &Layout, frac: u32, prediction: &'a [Vec<i32>]) -> Source<'a> {
     Source {
@@ -237,6 +238,40 @@ pub(crate) fn pass_limits(layout: &Layout, limit: &PassLimit) -> Vec<usize> {
                         .count()
                 })
                 .collect()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::refinement::Kernel;
+
+    #[test]
+    fn a_thumbnail_decodes_down_to_twice_its_size_less_a_pixel() {
+        let layout = Layout {
+            width: 4000,
+            height: 3000,
+            channels: 3,
+            kernel: Kernel::Integer97,
+            levels: 5,
+            top: vec![12; 3],
+        };
+        // Low-low bands: 2000 × 1500, 1000 × 750, 500 × 375, 250 × 188, 125 × 94.
+        for ((w, h), level) in [
+            ((500, 375), 2),
+            ((501, 375), 1),
+            ((250, 188), 3),
+            ((251, 188), 2),
+            ((250, 189), 2),
+            ((160, 120), 3),
+            ((125, 94), 4),
+            ((62, 47), 5),
+            ((1, 1), 5),
+            ((4000, 3000), 0),
+            ((8000, 6000), 0),
+        ] {
+            assert_eq!(thumbnail_level(&layout, w, h), level, "{w}x{h}");
         }
     }
 }
