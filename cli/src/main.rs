@@ -559,16 +559,29 @@ pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageForma
     if is_stdio(path) {
         return Ok(image::ImageFormat::Png);
     }
-    image::ImageFormat::from_path(path).map_err(|_| {
+    let format = image::ImageFormat::from_path(path).map_err(|_| {
         let hint = match has_qcs_extension(path) {
             true => " (qcs encode writes .qcs files)",
             false => "",
         };
         usage!(
-            "cannot write {}: unknown image format (use .png, .jpg, .gif, .bmp, .tiff, .webp, .pnm, .qoi or .tga){hint}",
+            "cannot write {}: unknown image format (use .png, .jpg, .gif, .bmp, .tiff, .webp, .ppm, .pgm, .pam, .qoi or .tga){hint}",
             path.display()
         )
-    })
+    })?;
+    if extension(path) == "pbm" {
+        return Err(usage!(
+            "cannot write {}: a PBM holds black and white only (use .pgm, .ppm or .pam)",
+            path.display()
+        ));
+    }
+    Ok(format)
+}
+
+/// The lowercased extension of `path` ("" without one).
+fn extension(path: &std::path::Path) -> String {
+    let ext = path.extension().unwrap_or_default();
+    ext.to_string_lossy().to_ascii_lowercase()
 }
 
 /// Writes `img` to `path` in the format of its extension, widening grey or grey+alpha to
@@ -594,7 +607,7 @@ pub fn save_image_icc(
         let mut bytes = Vec::new();
         let kept = encode_image(img, |img| {
             bytes.clear();
-            encode_into(img, format, icc, &mut std::io::Cursor::new(&mut bytes))
+            encode_into(img, format, "", icc, &mut std::io::Cursor::new(&mut bytes))
         })
         .map_err(|e| cannot(&e))?;
         write_output(path, &bytes)?;
@@ -606,7 +619,7 @@ pub fn save_image_icc(
     let part = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
     let written = encode_image(img, |img| {
         let mut sink = std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(&part)?);
-        let kept = encode_into(img, format, icc, &mut sink)?;
+        let kept = encode_into(img, format, &extension(path), icc, &mut sink)?;
         sink.flush()?;
         Ok(kept)
     })
@@ -636,15 +649,19 @@ fn encode_image(
     }
 }
 
-/// Encodes `img` in `format` into `sink`, with the ICC profile `icc` where the format can
-/// hold one (PNG, JPEG, TIFF, WebP). Returns whether the profile was written (`true`
-/// without one).
+/// Encodes `img` in `format` into `sink` (a file whose extension is `ext`), with the ICC
+/// profile `icc` where the format can hold one (PNG, JPEG, TIFF, WebP). Returns whether the
+/// profile was written (`true` without one).
 fn encode_into<W: std::io::Write + std::io::Seek>(
     img: &image::DynamicImage,
     format: image::ImageFormat,
+    ext: &str,
     icc: Option<&[u8]>,
     sink: &mut W,
 ) -> image::ImageResult<bool> {
+    if format == image::ImageFormat::Pnm {
+        return write_netpbm(img, ext, sink).map(|()| icc.is_none());
+    }
     use image::codecs::{jpeg, png, tiff, webp};
     use image::{ImageEncoder, ImageFormat};
     /// Writes `img` with `enc` carrying `icc`, or `None` if `enc` refuses profiles.
@@ -666,6 +683,38 @@ fn encode_into<W: std::io::Write + std::io::Seek>(
     match embedded {
         Some(r) => r.map(|()| true),
         None => img.write_to(sink, format).map(|()| icc.is_none()),
+    }
+}
+
+/// Writes `img` as the netpbm file its extension `ext` names: `.ppm` binary PPM (P6) and
+/// `.pgm` binary PGM (P5), without alpha, as JPEG; `.pnm` whichever of the two holds the
+/// picture, or PAM with alpha; `.pam` PAM (P7), which few viewers read. (`image` writes PAM
+/// whatever the name says.)
+fn write_netpbm(
+    img: &image::DynamicImage,
+    ext: &str,
+    sink: impl std::io::Write,
+) -> image::ImageResult<()> {
+    use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding::Binary};
+    use image::{ColorType, DynamicImage};
+    let enc = PnmEncoder::new(sink);
+    let (colour, alpha) = (img.color().has_color(), img.color().has_alpha());
+    let (kind, subtype) = match ext {
+        "ppm" => (ColorType::Rgb8, PnmSubtype::Pixmap(Binary)),
+        "pgm" => (ColorType::L8, PnmSubtype::Graymap(Binary)),
+        "pnm" if !alpha && colour => (ColorType::Rgb8, PnmSubtype::Pixmap(Binary)),
+        "pnm" if !alpha => (ColorType::L8, PnmSubtype::Graymap(Binary)),
+        _ => return img.write_with_encoder(enc),
+    };
+    // Converted only if need be: a 12-megapixel copy costs 36 MB.
+    match (img.color() == kind, kind) {
+        (true, _) => img.write_with_encoder(enc.with_subtype(subtype)),
+        (false, ColorType::Rgb8) => {
+            DynamicImage::ImageRgb8(img.to_rgb8()).write_with_encoder(enc.with_subtype(subtype))
+        }
+        (false, _) => {
+            DynamicImage::ImageLuma8(img.to_luma8()).write_with_encoder(enc.with_subtype(subtype))
+        }
     }
 }
 

@@ -1430,3 +1430,39 @@ fn a_memory_limit_refuses_decodes_and_encodes_beyond_it() {
     assert!(err.contains("raise --max-memory"), "{err}");
     assert!(!refused.exists());
 }
+
+/// A netpbm output is the kind its name says, as viewers expect: `.ppm` a binary PPM (P6),
+/// `.pgm` a binary PGM (P5), `.pnm` the one that holds the picture, `.pam` a PAM (P7); the
+/// pictures are the PNG's. A `.pbm` (black and white) is refused before the work.
+#[test]
+fn netpbm_outputs_are_what_their_names_say() {
+    let file = rocket_qcs("netpbm.qcs");
+    let png = scratch("netpbm.png");
+    assert!(run(qcs().args(["-q", "decode"]).arg(&file).arg(&png))
+        .status
+        .success());
+    let want = image::open(&png).expect("the PNG");
+    for (name, magic) in [
+        ("n.ppm", "P6"),
+        ("n.pgm", "P5"),
+        ("n.pnm", "P6"),
+        ("n.pam", "P7"),
+    ] {
+        let out = scratch(name);
+        let dec = run(qcs().args(["-q", "decode"]).arg(&file).arg(&out));
+        assert!(dec.status.success(), "{name}: {dec:?}");
+        let bytes = std::fs::read(&out).expect("written");
+        assert_eq!(&bytes[..2], magic.as_bytes(), "{name}");
+        let got = image::load_from_memory(&bytes).expect("a netpbm file");
+        if magic == "P5" {
+            assert_eq!(got.to_luma8(), want.to_luma8(), "{name}");
+        } else {
+            assert_eq!(got.to_rgb8(), want.to_rgb8(), "{name}");
+        }
+    }
+    let pbm = scratch("n.pbm");
+    let (c, err) = code(qcs().args(["decode"]).arg(&file).arg(&pbm));
+    assert_eq!(c, Some(2), "{err}");
+    assert!(err.contains("a PBM holds black and white only"), "{err}");
+    assert!(!pbm.exists());
+}

@@ -64,7 +64,7 @@ Tables printed (Markdown on standard output):
    closest to 0.3 Mpx. Encode from PPM: qcs at default quality, `opj_compress -I -r` at the
    ratio that gives qcs's file size, `cjpeg -quality 85`. Decode to PPM: `qcs decode`,
    `opj_decompress`, `djpeg`. Thumbnail of 1/8 the size: `qcs decode --size W/8xH/8`,
-   `opj_decompress -r 3`, `djpeg -scale 1/8` (qcs writes a `.ppm` as PAM, P7).
+   `opj_decompress -r 3`, `djpeg -scale 1/8`.
 
 `--quick`: rates 0.25 / 0.5 / 1 / 2 bpp, budgets 64 / 512 / 2048 / 8192 B, JPEG q in steps of
 5, one timing run and a 3-megapixel (2000×1500) picture instead of 12.
