@@ -46,7 +46,8 @@ pub struct EncodeArgs {
     /// predictive coding (default 75).
     #[arg(long, value_parser = clap::value_parser!(u8).range(0..=100), conflicts_with = "lossless")]
     pub quality: Option<u8>,
-    /// Exactly the input's pixels, every channel (with --levels-only: exact sample values).
+    /// Exactly the input's pixels, every channel, at 8 bits per channel (a deeper input is
+    /// stored as 8, with a warning; with --levels-only: exact sample values).
     #[arg(long)]
     pub lossless: bool,
     /// The best picture in at most this many bytes (the whole file), as cwebp's -size.
@@ -151,8 +152,8 @@ struct Encoded {
     header: Option<qcs::container::Header>,
     /// The size of the ICC profile stored, if any.
     icc: Option<usize>,
-    /// The samples the density asked for, when they were capped at the sample limit.
-    capped_from: Option<u64>,
+    /// What the file is not that was asked for (printed unless `--quiet`).
+    warnings: Vec<String>,
     /// With `--psnr`: the PSNR of the whole file decoded at full size, in dB.
     psnr: Option<f64>,
     /// Where the levels end and the refinement begins (byte offset), and its layers.
@@ -245,11 +246,25 @@ fn encode_file(
     let explicit = opts.samples.is_some() || density_given;
     // The encoder itself stops the default density at the default limit.
     let capped = !explicit && asked > limits.max_samples.min(qcs::Limits::default().max_samples);
-    let mut capped_from = None;
+    let mut warnings = Vec::new();
     if capped {
         let n = asked.min(limits.max_samples);
         opts.samples = Some(n);
-        capped_from = (n < asked).then_some(asked);
+        if n < asked {
+            warnings.push(format!(
+                "qcs: {}: {n} samples, fewer than the {asked} of the density: the most `qcs \
+                 decode` takes (--max-samples)",
+                input.display()
+            ));
+        }
+    }
+    let colour = img.color();
+    let bits = colour.bits_per_pixel() / colour.channel_count() as u16;
+    if bits > 8 {
+        warnings.push(format!(
+            "qcs: {}: {bits} bits per channel, stored as 8 (qcs keeps 8-bit pictures)",
+            input.display()
+        ));
     }
     limits
         .check_samples(if capped { 0 } else { asked })
@@ -314,7 +329,7 @@ fn encode_file(
         height: h,
         header: qcs::container::Header::parse(&bytes).ok().map(|(h, _)| h),
         icc: opts.icc.as_ref().map(Vec::len),
-        capped_from,
+        warnings,
         psnr,
         refinement: {
             let info = qcs::container::inspect(&bytes);
@@ -418,16 +433,8 @@ pub fn encode(a: EncodeArgs, ctx: &Ctx) -> Result<()> {
     }
     super::check_output(output)?;
     let e = encode_file(input, output, &opts, flags, ctx)?;
-    if let Some(asked) = e.capped_from {
-        eprintln_unless(
-            ctx.quiet,
-            format!(
-                "qcs: {}: {} samples, fewer than the {asked} of the density: the most \
-                 `qcs decode` takes (--max-samples)",
-                input.display(),
-                ctx.limits.max_samples
-            ),
-        );
+    for w in &e.warnings {
+        eprintln_unless(ctx.quiet, w);
     }
     eprintln_unless(ctx.quiet, e.summary(input, output));
     Ok(())
@@ -514,16 +521,8 @@ fn encode_many(
                 ok += 1;
                 bin += e.input.unwrap_or(0);
                 bout += e.output;
-                if let Some(asked) = e.capped_from {
-                    eprintln_unless(
-                        ctx.quiet,
-                        format!(
-                            "qcs: {}: {} samples, fewer than the {asked} of the density: the \
-                             most `qcs decode` takes (--max-samples)",
-                            p.display(),
-                            ctx.limits.max_samples
-                        ),
-                    );
+                for w in &e.warnings {
+                    eprintln_unless(ctx.quiet, w);
                 }
             }
             Err(e) => {

@@ -1466,3 +1466,22 @@ fn netpbm_outputs_are_what_their_names_say() {
     assert!(err.contains("a PBM holds black and white only"), "{err}");
     assert!(!pbm.exists());
 }
+
+/// An input deeper than 8 bits per channel is stored as 8 bits, and `qcs encode` says so
+/// (even `--lossless` keeps only those 8 bits); an 8-bit input gets no such warning.
+#[test]
+fn a_deeper_input_is_said_to_be_stored_as_8_bits() {
+    let deep = scratch("deep.png");
+    let grey =
+        image::ImageBuffer::from_fn(24, 16, |x, y| image::Luma([(x * 2731 + y * 97) as u16]));
+    image::DynamicImage::ImageLuma16(grey)
+        .save(&deep)
+        .expect("a 16-bit PNG");
+    let out = scratch("deep.qcs");
+    let (c, err) = code(qcs().args(["encode", "--lossless"]).arg(&deep).arg(&out));
+    assert_eq!(c, Some(0), "{err}");
+    assert!(err.contains("16 bits per channel, stored as 8"), "{err}");
+    let (c, err) = code(qcs().args(["encode"]).arg(ROCKET).arg(scratch("eight.qcs")));
+    assert_eq!(c, Some(0), "{err}");
+    assert!(!err.contains("bits per channel"), "{err}");
+}

@@ -19,7 +19,8 @@ pub enum Target {
     /// A quality from 0 (the smallest files) to 100 (nearly lossless), as cjpeg's and
     /// cwebp's: the refinement codes every bit-plane worth more than the quality allows.
     Quality(u8),
-    /// Exactly the input's pixels (every channel, alpha included).
+    /// Exactly the input's pixels (every channel, alpha included), at 8 bits per channel: an
+    /// image with deeper channels is reduced to 8 bits first.
     Lossless,
     /// The best picture the file can give in this many bytes (the whole file, at least its
     /// levels).
