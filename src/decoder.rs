@@ -42,6 +42,9 @@ pub struct DecodedImage {
     /// The file's ICC colour profile, if it has one and its chunk (after the first level) was
     /// received and verified: the colour space the pixels are in. `None` means sRGB.
     pub icc: Option<Vec<u8>>,
+    /// The file's Exif metadata, if it has one and its chunk was received and verified
+    /// ([`StreamDecoder::exif`]).
+    pub exif: Option<Vec<u8>>,
 }
 
 /// A render of a [`StreamDecoder`]: a preview while samples are missing, or the final picture.
@@ -439,7 +442,7 @@ impl StreamDecoder {
         self.stopped.as_ref()
     }
 
-    /// Metadata chunks (ICC profile, text) received so far.
+    /// Metadata chunks (ICC profile, Exif, text) received so far.
     pub fn metadata(&self) -> &[Metadata] {
         &self.metadata
     }
@@ -460,7 +463,28 @@ impl StreamDecoder {
     pub fn icc_profile(&self) -> Option<&[u8]> {
         self.metadata.iter().find_map(|m| match m {
             Metadata::Icc(icc) => Some(&icc[..]),
-            Metadata::Text { .. } => None,
+            _ => None,
+        })
+    }
+
+    /// The file's Exif metadata (a TIFF header and its IFDs, as PNG's `eXIf`), once its chunk
+    /// is received and verified (`None` before, and for a file without one). `qcs encode`
+    /// stores a photo's, its orientation reset: the pixels are stored upright.
+    ///
+    /// ```
+    /// use qcs::{EncodeOptions, StreamDecoder};
+    /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::new(8, 8));
+    /// let opts = EncodeOptions { exif: Some(b"MM\0*\0\0\0\x08\0\0".to_vec()), ..Default::default() };
+    /// let bytes = qcs::encode(&img, &opts)?;
+    /// let mut dec = StreamDecoder::new(qcs::Limits::default());
+    /// dec.push(&bytes)?;
+    /// assert_eq!(dec.exif(), Some(&b"MM\0*\0\0\0\x08\0\0"[..]));
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn exif(&self) -> Option<&[u8]> {
+        self.metadata.iter().find_map(|m| match m {
+            Metadata::Exif(exif) => Some(&exif[..]),
+            _ => None,
         })
     }
 
@@ -547,6 +571,7 @@ impl StreamDecoder {
             is_final: n == h.total_samples && self.is_complete() && !h.refinement,
             refined: false,
             icc: self.icc_profile().map(<[u8]>::to_vec),
+            exif: self.exif().map(<[u8]>::to_vec),
         };
         Ok(Picture::of(decoded))
     }
@@ -612,7 +637,10 @@ impl StreamDecoder {
         last: bool,
     ) -> Option<DecodedImage> {
         let complete = self.is_complete();
-        let icc = self.icc_profile().map(<[u8]>::to_vec);
+        let (icc, exif) = (
+            self.icc_profile().map(<[u8]>::to_vec),
+            self.exif().map(<[u8]>::to_vec),
+        );
         let r = self.refinement.as_mut()?;
         let pixels = if thumbnail {
             r.render_thumbnail(width, height, last)
@@ -627,6 +655,7 @@ impl StreamDecoder {
             is_final: complete,
             refined: true,
             icc,
+            exif,
         })
     }
 
@@ -707,7 +736,10 @@ impl StreamDecoder {
         for (k, s) in sites.iter().enumerate().skip(have) {
             set.push_site(s, &col[k * c..k * c + c]);
         }
-        let icc = self.icc_profile().map(<[u8]>::to_vec);
+        let (icc, exif) = (
+            self.icc_profile().map(<[u8]>::to_vec),
+            self.exif().map(<[u8]>::to_vec),
+        );
         let (verified, levels) = (self.verified, self.levels_within(&h, used));
         drop(self);
         set.settle(method);
@@ -720,6 +752,7 @@ impl StreamDecoder {
             is_final: used == h.total_samples && verified == h.total_samples && !h.refinement,
             refined: false,
             icc,
+            exif,
         })
     }
 }

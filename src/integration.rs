@@ -63,6 +63,26 @@ impl QcsImageDecoder {
             limits,
         })
     }
+
+    /// The first metadata chunk `pick` takes, once verified: the file is parsed as far as
+    /// that chunk (an error before it is the answer).
+    fn metadata(&self, pick: impl Fn(Metadata) -> Option<Vec<u8>>) -> ImageResult<Option<Vec<u8>>> {
+        let mut parser = Parser::new(ParserOptions {
+            limits: self.limits.clone(),
+            ..Default::default()
+        });
+        let mut events = Vec::new();
+        let parsed = parser.push(&self.bytes, &mut events);
+        let found = events.into_iter().find_map(|e| match e {
+            Event::Metadata { metadata, .. } => pick(metadata),
+            _ => None,
+        });
+        match (found, parsed) {
+            (Some(m), _) => Ok(Some(m)),
+            (None, Ok(())) => Ok(None),
+            (None, Err(e)) => Err(to_image_error(e)),
+        }
+    }
 }
 
 impl ImageDecoder for QcsImageDecoder {
@@ -92,24 +112,30 @@ impl ImageDecoder for QcsImageDecoder {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     fn icc_profile(&mut self) -> ImageResult<Option<Vec<u8>>> {
-        let mut parser = Parser::new(ParserOptions {
-            limits: self.limits.clone(),
-            ..Default::default()
-        });
-        let mut events = Vec::new();
-        let parsed = parser.push(&self.bytes, &mut events);
-        let icc = events.into_iter().find_map(|e| match e {
-            Event::Metadata {
-                metadata: Metadata::Icc(icc),
-                ..
-            } => Some(icc),
+        self.metadata(|m| match m {
+            Metadata::Icc(icc) => Some(icc),
             _ => None,
-        });
-        match (icc, parsed) {
-            (Some(icc), _) => Ok(Some(icc)),
-            (None, Ok(())) => Ok(None),
-            (None, Err(e)) => Err(to_image_error(e)),
-        }
+        })
+    }
+
+    /// The file's Exif metadata (its chunk follows the first level), as `image`'s decoders
+    /// of other formats give it.
+    ///
+    /// ```
+    /// use image::ImageDecoder;
+    /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::new(8, 8));
+    /// let exif = b"II*\0\x08\0\0\0\0\0".to_vec();
+    /// let opts = qcs::EncodeOptions { exif: Some(exif.clone()), ..Default::default() };
+    /// let bytes = qcs::encode(&img, &opts)?;
+    /// let mut dec = qcs::QcsImageDecoder::new(std::io::Cursor::new(bytes))?;
+    /// assert_eq!(dec.exif_metadata()?, Some(exif));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    fn exif_metadata(&mut self) -> ImageResult<Option<Vec<u8>>> {
+        self.metadata(|m| match m {
+            Metadata::Exif(exif) => Some(exif),
+            _ => None,
+        })
     }
 
     fn set_limits(&mut self, limits: image::Limits) -> ImageResult<()> {

@@ -43,7 +43,7 @@ pub struct Limits {
     /// picture in the predictive coding, can be a file of a few dozen bytes); raise it for
     /// larger images, lower it on small machines or for untrusted input.
     pub max_samples: u64,
-    /// Largest total size of metadata (ICC, text) kept by a decoder.
+    /// Largest total size of metadata (ICC, Exif, text) kept by a decoder.
     pub max_metadata_bytes: u64,
     /// The most memory, in bytes, a decode may hold at once by the decoder's account, which
     /// it checks before allocating: when the header arrives (for the levels it will decode and

@@ -861,6 +861,16 @@ fn chunk_order_rules() {
     let f = cat(&[header.clone(), l(0), icc.clone(), icc]);
     let e = format_err(parse_all(&f, Default::default()).2);
     assert!(matches!(e, FormatError::DuplicateIcc { chunk } if chunk.index == 2));
+    // Two Exif chunks, apart: the second is the error, at its tag byte.
+    let exif = chunk_by_hand(b'e', b"MM\0*\0\0\0\x08\0\0");
+    let f = cat(&[header.clone(), l(0), exif.clone(), l(1), exif.clone()]);
+    let (_, ev, r) = parse_all(&f, Default::default());
+    let e = format_err(r);
+    assert!(matches!(e, FormatError::DuplicateExif { chunk } if chunk.index == 3));
+    assert!(ev.iter().any(|e| matches!(
+        e,
+        Event::Metadata { metadata: Metadata::Exif(x), .. } if x == b"MM\0*\0\0\0\x08\0\0"
+    )));
 
     // Non-minimal chunk length.
     let mut f = cat(&[header.clone(), l(0)]);
@@ -912,6 +922,9 @@ fn writer_matches_hand_built_file() {
     w.write_level(&level_payload(2)).unwrap();
     w.write_icc(b"ICCPROFILE").unwrap();
     assert!(w.write_icc(b"again").is_err());
+    let mut twice = ContainerWriter::new(Vec::new(), &test_header()).unwrap();
+    twice.write_exif(b"II*\0\x08\0\0\0").unwrap();
+    assert!(twice.write_exif(b"II*\0\x08\0\0\0").is_err());
     assert!(w.write_level(&[0]).is_err());
     assert!(w.write_ancillary(b'X', b"").is_err());
     let bytes = w.finish().unwrap();

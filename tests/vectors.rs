@@ -240,13 +240,19 @@ fn vectors() -> Vec<Vector> {
         },
         Vector {
             name: "grey-8-text",
-            what: "grey, raw 8 bits, two text chunks after level 0 (one with a UTF-8 value)",
+            what: "grey, raw 8 bits, two text chunks (one with a UTF-8 value) and an Exif chunk \
+                   (`e`: orientation 1, big-endian) after level 0",
             image: grey(24, 24),
             opts: EncodeOptions {
                 text: vec![
                     ("Title".into(), "qcs conformance".into()),
                     ("Comment".into(), "Penrose — τ = 1.618…".into()),
                 ],
+                // A TIFF header (MM, 42, IFD at 8) and one IFD: Orientation (0x0112), SHORT, 1.
+                exif: Some(vec![
+                    0x4d, 0x4d, 0, 42, 0, 0, 0, 8, 0, 1, 0x01, 0x12, 0, 3, 0, 0, 0, 1, 0, 1, 0,
+                    0, 0, 0, 0, 0,
+                ]),
                 ..base(72, 8)
             },
             craft: None,
@@ -646,7 +652,7 @@ fn vectors_are_what_the_encoder_writes() {
 fn vectors_cover_what_the_set_promises() {
     use qcs::container::{inspect, Layout, Metadata};
     let mut layouts = Vec::new();
-    let (mut bits5, mut bits8, mut frame, mut text) = (false, false, false, false);
+    let (mut bits5, mut bits8, mut frame, mut text, mut exif) = (false, false, false, false, false);
     // Refinements: lossy (9/7) and lossless (5/3), a key limit and counts, all four layouts,
     // and a half picture drawn by the refinement from part of its streams.
     let (mut lossy, mut lossless, mut by_key, mut by_count, mut half_refined) =
@@ -689,11 +695,12 @@ fn vectors_cover_what_the_set_promises() {
             .metadata
             .iter()
             .any(|m| matches!(m, Metadata::Text { .. }));
+        exif |= ins.metadata.iter().any(|m| matches!(m, Metadata::Exif(_)));
     }
     for l in [Layout::Grey, Layout::Rgb, Layout::Rgba] {
         assert!(layouts.contains(&l), "{l:?} missing");
     }
-    assert!(bits5 && bits8 && frame && text && defaults == [true; 2]);
+    assert!(bits5 && bits8 && frame && text && exif && defaults == [true; 2]);
     for l in [Layout::Grey, Layout::GreyAlpha, Layout::Rgb, Layout::Rgba] {
         assert!(
             refined_layouts.contains(&l),

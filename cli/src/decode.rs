@@ -234,13 +234,27 @@ pub fn decode(a: DecodeArgs, ctx: &Ctx) -> Result<()> {
             d.levels_complete,
         )?;
     }
-    let kept = super::save_image_icc(&d.image, out, d.icc.as_deref())?;
-    if !kept {
+    let meta = super::Meta {
+        icc: d.icc.as_deref(),
+        exif: d.exif.as_deref(),
+    };
+    let dropped = super::save_image_with(&d.image, out, meta)?;
+    if dropped.icc {
         super::warn(format!(
             "{} cannot hold the file's ICC colour profile: its colours are not sRGB and will \
              look wrong; write PNG, JPEG, TIFF or WebP to keep it",
             out.display()
         ));
+    }
+    if dropped.exif {
+        eprintln_unless(
+            ctx.quiet,
+            format!(
+                "qcs: {} cannot hold the file's Exif metadata (camera, date, place): write \
+                 PNG, JPEG or WebP to keep it",
+                out.display()
+            ),
+        );
     }
     // A thumbnail differs from the plain render from 2.25 samples per output pixel on
     // (2 × 2 subpixels each).
@@ -353,8 +367,12 @@ fn frames(
             )?;
             warned = true;
         }
-        // PNG holds the ICC profile.
-        super::save_image_icc(&d.image, &path, d.icc.as_deref())?;
+        // PNG holds the ICC profile and the Exif.
+        let meta = super::Meta {
+            icc: d.icc.as_deref(),
+            exif: d.exif.as_deref(),
+        };
+        super::save_image_with(&d.image, &path, meta)?;
         eprintln_unless(
             ctx.quiet,
             format!("{}: {} samples", path.display(), d.samples_used),

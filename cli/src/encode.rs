@@ -80,10 +80,24 @@ pub struct EncodeArgs {
     /// without a profile means anyway.
     #[arg(long)]
     pub strip_icc: bool,
+    /// Drop the input's Exif metadata (camera, date, place). By default it is stored (after
+    /// the first level), its orientation set upright as the pixels are.
+    #[arg(long)]
+    pub strip_exif: bool,
     /// Also decode the file written (whole, at full size) and print its PSNR against the
     /// image (over RGB).
     #[arg(long)]
     pub psnr: bool,
+}
+
+/// What `encode_file` takes from the command line besides the encoder's options.
+#[derive(Clone, Copy)]
+struct Flags {
+    strip_icc: bool,
+    strip_exif: bool,
+    /// `--density` was given (a count beyond the sample limit is then refused, not capped).
+    density_given: bool,
+    psnr: bool,
 }
 
 fn parse_density(s: &str) -> Result<f64, String> {
@@ -152,6 +166,8 @@ struct Encoded {
     header: Option<qcs::container::Header>,
     /// The size of the ICC profile stored, if any.
     icc: Option<usize>,
+    /// The size of the Exif metadata stored, if any.
+    exif: Option<usize>,
     /// What the file is not that was asked for (printed unless `--quiet`).
     warnings: Vec<String>,
     /// With `--psnr`: the PSNR of the whole file decoded at full size, in dB.
@@ -202,8 +218,17 @@ impl Encoded {
         if let Some(p) = self.psnr {
             let _ = write!(s, ", PSNR {p:.2} dB");
         }
-        if let Some(n) = self.icc {
-            let _ = write!(s, " (with its {n}-byte ICC profile)");
+        match (self.icc, self.exif) {
+            (Some(i), Some(e)) => {
+                let _ = write!(s, " (with its {i}-byte ICC profile and {e}-byte Exif)");
+            }
+            (Some(i), None) => {
+                let _ = write!(s, " (with its {i}-byte ICC profile)");
+            }
+            (None, Some(e)) => {
+                let _ = write!(s, " (with its {e}-byte Exif)");
+            }
+            (None, None) => {}
         }
         s
     }
@@ -215,12 +240,17 @@ fn encode_file(
     input: &Path,
     output: &Path,
     opts: &EncodeOptions,
-    (strip_icc, density_given, psnr): (bool, bool, bool),
+    flags: Flags,
     ctx: &Ctx,
 ) -> Result<Encoded> {
-    let (img, icc) = super::read_image(input, ctx)?;
+    let super::Photo {
+        image: img,
+        icc,
+        exif,
+    } = super::read_image(input, ctx)?;
     let mut opts = opts.clone();
-    opts.icc = icc.filter(|icc| !strip_icc && !super::icc::is_srgb(icc));
+    opts.icc = icc.filter(|icc| !flags.strip_icc && !super::icc::is_srgb(icc));
+    opts.exif = exif.filter(|_| !flags.strip_exif);
     // A file `qcs decode` would refuse is not worth writing.
     let limits = &ctx.limits;
     let (w, h) = (img.width(), img.height());
@@ -243,7 +273,7 @@ fn encode_file(
         (None, _) => opts.sample_count(w, h),
     }
     .min(px);
-    let explicit = opts.samples.is_some() || density_given;
+    let explicit = opts.samples.is_some() || flags.density_given;
     // The encoder itself stops the default density at the default limit.
     let capped = !explicit && asked > limits.max_samples.min(qcs::Limits::default().max_samples);
     let mut warnings = Vec::new();
@@ -277,6 +307,7 @@ fn encode_file(
             )
         })?;
     let metadata: usize = opts.icc.as_ref().map_or(0, Vec::len)
+        + opts.exif.as_ref().map_or(0, Vec::len)
         + opts
             .text
             .iter()
@@ -304,7 +335,7 @@ fn encode_file(
                 input.display()
             )
         })?;
-    let psnr = match psnr {
+    let psnr = match flags.psnr {
         false => None,
         true => {
             let d = qcs::decode(
@@ -329,6 +360,7 @@ fn encode_file(
         height: h,
         header: qcs::container::Header::parse(&bytes).ok().map(|(h, _)| h),
         icc: opts.icc.as_ref().map(Vec::len),
+        exif: opts.exif.as_ref().map(Vec::len),
         warnings,
         psnr,
         refinement: {
@@ -386,7 +418,12 @@ fn refuse_image_name(out: &Path) -> Result<()> {
 
 pub fn encode(a: EncodeArgs, ctx: &Ctx) -> Result<()> {
     let opts = a.options();
-    let flags = (a.strip_icc, a.density.is_some(), a.psnr);
+    let flags = Flags {
+        strip_icc: a.strip_icc,
+        strip_exif: a.strip_exif,
+        density_given: a.density.is_some(),
+        psnr: a.psnr,
+    };
     if let Some(dir) = &a.out_dir {
         return encode_many(&a, dir, &opts, flags, ctx);
     }
@@ -444,7 +481,7 @@ fn encode_many(
     a: &EncodeArgs,
     dir: &Path,
     opts: &EncodeOptions,
-    flags: (bool, bool, bool),
+    flags: Flags,
     ctx: &Ctx,
 ) -> Result<()> {
     if a.paths.iter().any(|p| super::is_stdio(p)) {

@@ -120,6 +120,7 @@ pub fn info(a: InfoArgs, ctx: &Ctx) -> Result<()> {
     for m in &ins.metadata {
         match m {
             qcs::container::Metadata::Icc(p) => say!("ICC profile: {} bytes", p.len()),
+            qcs::container::Metadata::Exif(p) => say!("Exif: {} bytes", p.len()),
             qcs::container::Metadata::Text { key, value } => say!("text: {key} = {value}"),
         }
     }

@@ -482,18 +482,23 @@ pub fn looks_like_qcs(bytes: &[u8]) -> bool {
 /// does), not by extension, upright: its Exif orientation (a camera's "rotate 90°") is
 /// applied to the pixels.
 pub fn open_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<image::DynamicImage> {
-    Ok(read_image(p, ctx)?.0)
+    Ok(read_image(p, ctx)?.image)
 }
 
-/// [`open_image`], and the image's ICC colour profile if it has one.
+/// An image read to be encoded: its pixels upright, and the metadata kept with them.
+pub struct Photo {
+    pub image: image::DynamicImage,
+    pub icc: Option<Vec<u8>>,
+    pub exif: Option<Vec<u8>>,
+}
+
+/// [`open_image`], and the image's ICC colour profile and Exif metadata if it has them (the
+/// Exif's orientation set upright, as the pixels are).
 ///
-/// Orientation and profile are metadata: one that cannot be read leaves the image as it
-/// is (unrotated, sRGB) rather than refusing it. A .qcs file is refused with a hint: it is
-/// decoded, not encoded.
-pub fn read_image(
-    p: &std::path::Path,
-    ctx: &Ctx,
-) -> anyhow::Result<(image::DynamicImage, Option<Vec<u8>>)> {
+/// Orientation, profile and Exif are metadata: one that cannot be read leaves the image as
+/// it is (unrotated, sRGB, without Exif) rather than refusing it. A .qcs file is refused with
+/// a hint: it is decoded, not encoded.
+pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
     use anyhow::Context;
     use image::ImageDecoder;
     use std::io::{BufRead, Seek};
@@ -544,12 +549,21 @@ pub fn read_image(
     }
     .with_context(ctx_msg)?;
     let icc = decoder.icc_profile().ok().flatten();
+    let mut exif = decoder.exif_metadata().ok().flatten();
     let orientation = decoder
         .orientation()
         .unwrap_or(image::metadata::Orientation::NoTransforms);
     let mut img = image::DynamicImage::from_decoder(decoder).with_context(ctx_msg)?;
     img.apply_orientation(orientation);
-    Ok((img, icc))
+    // The pixels are upright now: so says the Exif kept, lest a viewer turn them again.
+    if let Some(e) = &mut exif {
+        let _ = image::metadata::Orientation::remove_from_exif_chunk(e);
+    }
+    Ok(Photo {
+        image: img,
+        icc,
+        exif,
+    })
 }
 
 /// The image format an output path's extension names; PNG for `-` (standard output, checked
@@ -588,16 +602,32 @@ fn extension(path: &std::path::Path) -> String {
 /// RGB(A) for encoders that lack them (GIF, QOI, TIFF), and creating the file only once the
 /// whole image is encoded (no empty or partial file on error).
 pub fn save_image(img: &image::DynamicImage, path: &std::path::Path) -> anyhow::Result<()> {
-    save_image_icc(img, path, None).map(|_| ())
+    save_image_with(img, path, Meta::default()).map(|_| ())
 }
 
-/// [`save_image`] with an ICC colour profile, embedded when the format can hold one (PNG,
-/// JPEG, TIFF, WebP). Returns whether the profile was written (`true` without one).
-pub fn save_image_icc(
+/// Metadata an output carries where its format can.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Meta<'a> {
+    /// An ICC colour profile: PNG, JPEG, TIFF and WebP hold one.
+    pub icc: Option<&'a [u8]>,
+    /// Exif metadata: PNG, JPEG and WebP hold it.
+    pub exif: Option<&'a [u8]>,
+}
+
+/// What of a [`Meta`] an output's format could not hold.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Dropped {
+    pub icc: bool,
+    pub exif: bool,
+}
+
+/// [`save_image`] with `meta` embedded where the format can hold it. Returns what it could
+/// not hold.
+pub fn save_image_with(
     img: &image::DynamicImage,
     path: &std::path::Path,
-    icc: Option<&[u8]>,
-) -> anyhow::Result<bool> {
+    meta: Meta,
+) -> anyhow::Result<Dropped> {
     use std::io::Write;
     let format = output_format(path)?;
     let cannot =
@@ -605,13 +635,13 @@ pub fn save_image_icc(
     if is_stdio(path) {
         // Standard output cannot seek, as some encoders need: the picture is made in memory.
         let mut bytes = Vec::new();
-        let kept = encode_image(img, |img| {
+        let dropped = encode_image(img, |img| {
             bytes.clear();
-            encode_into(img, format, "", icc, &mut std::io::Cursor::new(&mut bytes))
+            encode_into(img, format, "", meta, &mut std::io::Cursor::new(&mut bytes))
         })
         .map_err(|e| cannot(&e))?;
         write_output(path, &bytes)?;
-        return Ok(kept);
+        return Ok(dropped);
     }
     // Streamed into a file beside the output, which takes its name only when complete: an
     // error leaves no partial picture, and the encoded bytes are never all in memory.
@@ -619,14 +649,14 @@ pub fn save_image_icc(
     let part = path.with_file_name(format!(".{name}.{}.part", std::process::id()));
     let written = encode_image(img, |img| {
         let mut sink = std::io::BufWriter::with_capacity(1 << 16, std::fs::File::create(&part)?);
-        let kept = encode_into(img, format, &extension(path), icc, &mut sink)?;
+        let dropped = encode_into(img, format, &extension(path), meta, &mut sink)?;
         sink.flush()?;
-        Ok(kept)
+        Ok(dropped)
     })
     .map_err(|e| cannot(&e))
-    .and_then(|kept| {
+    .and_then(|dropped| {
         std::fs::rename(&part, path).map_err(|e| cannot(&e))?;
-        Ok(kept)
+        Ok(dropped)
     });
     if written.is_err() {
         let _ = std::fs::remove_file(&part);
@@ -635,10 +665,10 @@ pub fn save_image_icc(
 }
 
 /// `encode(img)`, and again in 8-bit RGB(A) if the format cannot hold `img`'s colour type.
-fn encode_image(
+fn encode_image<T>(
     img: &image::DynamicImage,
-    mut encode: impl FnMut(&image::DynamicImage) -> image::ImageResult<bool>,
-) -> image::ImageResult<bool> {
+    mut encode: impl FnMut(&image::DynamicImage) -> image::ImageResult<T>,
+) -> image::ImageResult<T> {
     match encode(img) {
         Err(image::ImageError::Unsupported(_)) => encode(&if img.color().has_alpha() {
             image::DynamicImage::ImageRgba8(img.to_rgba8())
@@ -649,40 +679,43 @@ fn encode_image(
     }
 }
 
-/// Encodes `img` in `format` into `sink` (a file whose extension is `ext`), with the ICC
-/// profile `icc` where the format can hold one (PNG, JPEG, TIFF, WebP). Returns whether the
-/// profile was written (`true` without one).
+/// Encodes `img` in `format` into `sink` (a file whose extension is `ext`), with `meta` where
+/// the format can hold it. Returns what it could not hold.
 fn encode_into<W: std::io::Write + std::io::Seek>(
     img: &image::DynamicImage,
     format: image::ImageFormat,
     ext: &str,
-    icc: Option<&[u8]>,
+    meta: Meta,
     sink: &mut W,
-) -> image::ImageResult<bool> {
-    if format == image::ImageFormat::Pnm {
-        return write_netpbm(img, ext, sink).map(|()| icc.is_none());
-    }
+) -> image::ImageResult<Dropped> {
     use image::codecs::{jpeg, png, tiff, webp};
     use image::{ImageEncoder, ImageFormat};
-    /// Writes `img` with `enc` carrying `icc`, or `None` if `enc` refuses profiles.
-    fn with_icc<E: ImageEncoder>(
+    /// Writes `img` with `enc`, carrying what of `meta` it takes.
+    fn with<E: ImageEncoder>(
         img: &image::DynamicImage,
         mut enc: E,
-        icc: &[u8],
-    ) -> Option<image::ImageResult<()>> {
-        enc.set_icc_profile(icc.to_vec()).ok()?;
-        Some(img.write_with_encoder(enc))
+        meta: Meta,
+    ) -> image::ImageResult<Dropped> {
+        let icc = meta
+            .icc
+            .is_some_and(|icc| enc.set_icc_profile(icc.to_vec()).is_err());
+        let exif = meta
+            .exif
+            .is_some_and(|e| enc.set_exif_metadata(e.to_vec()).is_err());
+        img.write_with_encoder(enc)?;
+        Ok(Dropped { icc, exif })
     }
-    let embedded = icc.and_then(|icc| match format {
-        ImageFormat::Png => with_icc(img, png::PngEncoder::new(&mut *sink), icc),
-        ImageFormat::Jpeg => with_icc(img, jpeg::JpegEncoder::new(&mut *sink), icc),
-        ImageFormat::Tiff => with_icc(img, tiff::TiffEncoder::new(&mut *sink), icc),
-        ImageFormat::WebP => with_icc(img, webp::WebPEncoder::new_lossless(&mut *sink), icc),
-        _ => None,
-    });
-    match embedded {
-        Some(r) => r.map(|()| true),
-        None => img.write_to(sink, format).map(|()| icc.is_none()),
+    let none = Dropped {
+        icc: meta.icc.is_some(),
+        exif: meta.exif.is_some(),
+    };
+    match format {
+        ImageFormat::Png => with(img, png::PngEncoder::new(sink), meta),
+        ImageFormat::Jpeg => with(img, jpeg::JpegEncoder::new(sink), meta),
+        ImageFormat::Tiff => with(img, tiff::TiffEncoder::new(sink), meta),
+        ImageFormat::WebP => with(img, webp::WebPEncoder::new_lossless(sink), meta),
+        ImageFormat::Pnm => write_netpbm(img, ext, sink).map(|()| none),
+        _ => img.write_to(sink, format).map(|()| none),
     }
 }
 

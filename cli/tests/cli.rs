@@ -533,6 +533,17 @@ fn frames_at_every_level_and_layer() {
     assert_eq!(gif_frames(&gif), parts);
 }
 
+/// A camera's Exif: a big-endian TIFF header and one IFD of two entries: Make (0x010F),
+/// ASCII, "QcsCam" at byte 38; Orientation (0x0112), SHORT, `orientation`.
+fn camera_exif(orientation: u8) -> Vec<u8> {
+    let mut e = vec![b'M', b'M', 0, 42, 0, 0, 0, 8, 0, 2];
+    e.extend_from_slice(&[0x01, 0x0f, 0, 2, 0, 0, 0, 7, 0, 0, 0, 38]);
+    e.extend_from_slice(&[0x01, 0x12, 0, 3, 0, 0, 0, 1, 0, orientation, 0, 0]);
+    e.extend_from_slice(&[0, 0, 0, 0]);
+    e.extend_from_slice(b"QcsCam\0");
+    e
+}
+
 /// A camera's picture: a 24 × 16 PNG, left half red and right half blue, whose Exif says
 /// "rotate 90° clockwise" to be upright, with an ICC profile that is not sRGB.
 fn camera_png(name: &str, icc: &[u8]) -> PathBuf {
@@ -540,15 +551,11 @@ fn camera_png(name: &str, icc: &[u8]) -> PathBuf {
     let img = image::RgbImage::from_fn(24, 16, |x, _| {
         image::Rgb(if x < 12 { [220, 20, 20] } else { [20, 20, 220] })
     });
-    // Big-endian TIFF header, one IFD entry: Orientation (0x0112), SHORT, 1 value: 6.
-    let exif = [
-        b'M', b'M', 0, 42, 0, 0, 0, 8, 0, 1, 0x01, 0x12, 0, 3, 0, 0, 0, 1, 0, 6, 0, 0, 0, 0, 0, 0,
-    ];
+    let exif = camera_exif(6);
     let mut bytes = Vec::new();
     let mut enc = image::codecs::png::PngEncoder::new(&mut bytes);
     enc.set_icc_profile(icc.to_vec()).expect("PNG holds ICC");
-    enc.set_exif_metadata(exif.to_vec())
-        .expect("PNG holds Exif");
+    enc.set_exif_metadata(exif).expect("PNG holds Exif");
     enc.write_image(img.as_raw(), 24, 16, image::ExtendedColorType::Rgb8)
         .expect("PNG");
     let path = scratch(name);
@@ -556,16 +563,18 @@ fn camera_png(name: &str, icc: &[u8]) -> PathBuf {
     path
 }
 
-/// The ICC profile of a PNG, if any.
-fn png_icc(path: &PathBuf) -> Option<Vec<u8>> {
+/// The ICC profile and the Exif of a PNG, if any.
+fn png_metadata(path: &PathBuf) -> (Option<Vec<u8>>, Option<Vec<u8>>) {
     use image::ImageDecoder;
     let file = std::io::BufReader::new(std::fs::File::open(path).expect("open"));
     let mut dec = image::codecs::png::PngDecoder::new(file).expect("a PNG");
-    dec.icc_profile().expect("readable")
+    let icc = dec.icc_profile().expect("readable");
+    (icc, dec.exif_metadata().expect("readable"))
 }
 
 /// `qcs encode` stores a photo upright (its Exif orientation applied) with its colour
-/// profile, and `qcs decode` writes the profile back, unless `--strip-icc` drops it.
+/// profile and its Exif (orientation now 1), and `qcs decode` writes them back, unless
+/// `--strip-icc` or `--strip-exif` drops them.
 #[test]
 fn orientation_and_colour_profile_survive_a_round_trip() {
     let icc = b"a Display P3 profile, as far as this test cares".to_vec();
@@ -575,7 +584,10 @@ fn orientation_and_colour_profile_survive_a_round_trip() {
     assert!(enc.status.success(), "{enc:?}");
     let said = String::from_utf8_lossy(&enc.stderr);
     assert!(
-        said.contains(&format!("its {}-byte ICC profile", icc.len())),
+        said.contains(&format!(
+            "its {}-byte ICC profile and 45-byte Exif",
+            icc.len()
+        )),
         "{said}"
     );
     let dec = run(qcs().args(["-q", "decode"]).arg(&file).arg(&back));
@@ -586,7 +598,10 @@ fn orientation_and_colour_profile_survive_a_round_trip() {
     let (top, bottom) = (img.get_pixel(8, 3).0, img.get_pixel(8, 20).0);
     assert!(top[0] > 180 && top[2] < 60, "top {top:?}");
     assert!(bottom[2] > 180 && bottom[0] < 60, "bottom {bottom:?}");
-    assert_eq!(png_icc(&back), Some(icc.clone()));
+    assert_eq!(
+        png_metadata(&back),
+        (Some(icc.clone()), Some(camera_exif(1)))
+    );
 
     // Dropped on request.
     let stripped = scratch("camera-stripped.qcs");
@@ -597,13 +612,23 @@ fn orientation_and_colour_profile_survive_a_round_trip() {
     assert!(enc.status.success(), "{enc:?}");
     let dec = run(qcs().args(["-q", "decode"]).arg(&stripped).arg(&back));
     assert!(dec.status.success(), "{dec:?}");
-    assert_eq!(png_icc(&back), None);
+    assert_eq!(png_metadata(&back), (None, Some(camera_exif(1))));
+    let enc = run(qcs()
+        .args(["-q", "encode", "--strip-exif"])
+        .arg(&src)
+        .arg(&stripped));
+    assert!(enc.status.success(), "{enc:?}");
+    let dec = run(qcs().args(["-q", "decode"]).arg(&stripped).arg(&back));
+    assert!(dec.status.success(), "{dec:?}");
+    assert_eq!(png_metadata(&back), (Some(icc.clone()), None));
 
     // A format without profiles: written, with a warning.
     let bmp = scratch("camera-back.bmp");
     let dec = run(qcs().arg("decode").arg(&file).arg(&bmp));
     assert!(dec.status.success(), "{dec:?}");
-    assert!(String::from_utf8_lossy(&dec.stderr).contains("cannot hold the file's ICC"));
+    let said = String::from_utf8_lossy(&dec.stderr);
+    assert!(said.contains("cannot hold the file's ICC"), "{said}");
+    assert!(said.contains("cannot hold the file's Exif"), "{said}");
 }
 
 /// Waits for `child` (`wait4`, as `Child::wait` would) and returns its exit code and peak

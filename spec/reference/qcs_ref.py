@@ -746,7 +746,7 @@ def decode(buf):
     site_list = []  # computed lazily, up to the end of the level being decoded
     level = 0
     pos = h.length
-    meta_icc = 0
+    meta_icc = meta_exif = 0
 
     def decode_level(k, payload, length):
         s, e = h.levels[k]
@@ -830,6 +830,10 @@ def decode(buf):
             meta_icc += 1
             if meta_icc > 1:
                 raise QcsError("second i chunk")
+        elif tag == 0x65:  # e: Exif, at most one
+            meta_exif += 1
+            if meta_exif > 1:
+                raise QcsError("second e chunk")
         elif tag == 0x74:  # t: key (>=1 byte, no 0x00) 0x00 value, UTF-8
             z = payload.find(b"\x00")
             if z < 1:

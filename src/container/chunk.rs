@@ -10,6 +10,8 @@ pub const LEVEL: u8 = b'L';
 pub const REFINEMENT: u8 = b'R';
 /// `i`: an ICC profile, raw bytes (ancillary).
 pub const ICC: u8 = b'i';
+/// `e`: Exif metadata, the TIFF-structured block (as PNG's `eXIf`), raw bytes (ancillary).
+pub const EXIF: u8 = b'e';
 /// `t`: a text comment, UTF-8 `key`, 0x00, UTF-8 `value` (ancillary).
 pub const TEXT: u8 = b't';
 

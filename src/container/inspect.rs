@@ -327,6 +327,7 @@ impl std::fmt::Display for Inspection {
         for m in &self.metadata {
             match m {
                 Metadata::Icc(p) => writeln!(f, "ICC profile: {} bytes", p.len())?,
+                Metadata::Exif(p) => writeln!(f, "Exif: {} bytes", p.len())?,
                 Metadata::Text { key, value } => writeln!(f, "text: {key} = {value}")?,
             }
         }

@@ -238,6 +238,12 @@ pub enum FormatError {
         /// The chunk.
         chunk: ChunkRef,
     },
+    /// A second Exif chunk.
+    #[error("{chunk}: second Exif chunk")]
+    DuplicateExif {
+        /// The chunk.
+        chunk: ChunkRef,
+    },
     /// The file uses a coding this decoder does not implement (e.g. the reserved predictive coding).
     #[error("coding {coding} is not supported by this decoder")]
     UnsupportedCoding {
@@ -272,6 +278,7 @@ impl FormatError {
             | FormatError::UnknownCritical { chunk }
             | FormatError::ExtraLevel { chunk }
             | FormatError::DuplicateIcc { chunk }
+            | FormatError::DuplicateExif { chunk }
             | FormatError::MisplacedLayer { chunk, .. }
             | FormatError::BadRefinement { chunk, .. }
             | FormatError::RefinementVarint { chunk, .. }

@@ -1,6 +1,6 @@
 //! The push parser: bytes in any chunking → [`Event`]s (spec/format.md §Decoding and truncation).
 
-use super::chunk::{self, ICC, LEVEL, REFINEMENT, TEXT};
+use super::chunk::{self, EXIF, ICC, LEVEL, REFINEMENT, TEXT};
 use super::header::{FieldOffsets, Header, Stop, MAX_HEADER_LEN};
 use super::refinement::{Bad, Read, RefinementHeader, TableReader};
 use super::varint::VarintReader;
@@ -46,6 +46,8 @@ pub struct ParserOptions {
 pub enum Metadata {
     /// `i`: an ICC profile.
     Icc(Vec<u8>),
+    /// `e`: Exif metadata (a TIFF header and its IFDs, as PNG's `eXIf`).
+    Exif(Vec<u8>),
     /// `t`: a text comment.
     Text {
         /// The key (non-empty, UTF-8, no 0x00).
@@ -202,6 +204,7 @@ enum Kind {
     Level { level: u32, samples: Range<u64> },
     Layer(LayerRead),
     Icc(Vec<u8>),
+    Exif(Vec<u8>),
     Text(Vec<u8>),
     Skip,
 }
@@ -319,6 +322,7 @@ pub struct Parser {
     samples_verified: u64,
     metadata_bytes: u64,
     seen_icc: bool,
+    seen_exif: bool,
     /// The refinement header, once read (version 3).
     refinement: Option<RefinementHeader>,
     /// Layers started and verified.
@@ -342,6 +346,7 @@ impl Parser {
             samples_verified: 0,
             metadata_bytes: 0,
             seen_icc: false,
+            seen_exif: false,
             refinement: None,
             layers_started: 0,
             layers_verified: 0,
@@ -536,7 +541,9 @@ impl Parser {
                         level: *level,
                         bytes: bytes.to_vec(),
                     }),
-                    Kind::Icc(buf) | Kind::Text(buf) => buf.extend_from_slice(bytes),
+                    Kind::Icc(buf) | Kind::Exif(buf) | Kind::Text(buf) => {
+                        buf.extend_from_slice(bytes)
+                    }
                     Kind::Skip => {}
                 }
                 received += take as u32;
@@ -737,6 +744,8 @@ impl Parser {
             return Err(Fail::Format(FormatError::UnknownCritical { chunk }));
         } else if tag == ICC && self.seen_icc {
             return Err(Fail::Format(FormatError::DuplicateIcc { chunk }));
+        } else if tag == EXIF && self.seen_exif {
+            return Err(Fail::Format(FormatError::DuplicateExif { chunk }));
         }
         let mut hasher = crc32fast::Hasher::new();
         hasher.update(&[tag]);
@@ -793,19 +802,24 @@ impl Parser {
                     segments: None,
                 }))
             }
-            ICC | TEXT => {
+            ICC | EXIF | TEXT => {
                 let total = self.metadata_bytes.saturating_add(len as u64);
                 self.opts
                     .limits
                     .check_metadata(total)
                     .map_err(Fail::Limits)?;
                 self.metadata_bytes = total;
-                if chunk.tag == ICC {
-                    self.seen_icc = true;
-                    Ok(Kind::Icc(Vec::new()))
-                } else {
-                    Ok(Kind::Text(Vec::new()))
-                }
+                Ok(match chunk.tag {
+                    ICC => {
+                        self.seen_icc = true;
+                        Kind::Icc(Vec::new())
+                    }
+                    EXIF => {
+                        self.seen_exif = true;
+                        Kind::Exif(Vec::new())
+                    }
+                    _ => Kind::Text(Vec::new()),
+                })
             }
             _ => Ok(Kind::Skip),
         }
@@ -846,6 +860,10 @@ impl Parser {
             Kind::Icc(data) => events.push(Event::Metadata {
                 chunk,
                 metadata: Metadata::Icc(data),
+            }),
+            Kind::Exif(data) => events.push(Event::Metadata {
+                chunk,
+                metadata: Metadata::Exif(data),
             }),
             Kind::Text(data) => {
                 let bad = |reason| Fail::Format(FormatError::BadText { chunk, reason });

@@ -1,6 +1,6 @@
 //! Writing a `.qcs` file to any [`std::io::Write`].
 
-use super::chunk::{self, ICC, LEVEL, REFINEMENT, TEXT};
+use super::chunk::{self, EXIF, ICC, LEVEL, REFINEMENT, TEXT};
 use super::refinement::Bad;
 use super::{encode_layer, Header, RefinementHeader};
 use std::io::Write;
@@ -32,6 +32,7 @@ pub struct ContainerWriter<W: Write> {
     pending: Vec<Vec<u8>>,
     written: u64,
     icc_written: bool,
+    exif_written: bool,
     /// The header's bytes, until level 0 (whose CRC covers them) is written.
     header_bytes: Vec<u8>,
     /// The refinement header once its first layer is written, and the layers written.
@@ -52,6 +53,7 @@ impl<W: Write> ContainerWriter<W> {
             pending: Vec::new(),
             written: bytes.len() as u64,
             icc_written: false,
+            exif_written: false,
             header_bytes: bytes,
             refinement: None,
             layers_written: 0,
@@ -186,7 +188,8 @@ impl<W: Write> ContainerWriter<W> {
     }
 
     /// Writes (or, before level 0, queues) an ancillary chunk. `tag` must have the ancillary bit
-    /// (0x20) set; the payload is written as given. At most one ICC (`i`) chunk.
+    /// (0x20) set; the payload is written as given. At most one ICC (`i`) and one Exif (`e`)
+    /// chunk.
     pub fn write_ancillary(&mut self, tag: u8, payload: &[u8]) -> Result<(), crate::Error> {
         if !chunk::is_ancillary(tag) {
             return Err(crate::Error::invalid(
@@ -195,14 +198,19 @@ impl<W: Write> ContainerWriter<W> {
                 "an ancillary tag (bit 0x20 set)",
             ));
         }
-        if tag == ICC {
-            if self.icc_written {
+        let once = match tag {
+            ICC => Some((&mut self.icc_written, "ContainerWriter::write_icc", "an ICC profile")),
+            EXIF => Some((&mut self.exif_written, "ContainerWriter::write_exif", "an Exif chunk")),
+            _ => None,
+        };
+        if let Some((written, call, what)) = once {
+            if *written {
                 return Err(crate::Error::misuse(
-                    "ContainerWriter::write_icc",
-                    "an ICC profile is written already: a file holds at most one",
+                    call,
+                    format!("{what} is written already: a file holds at most one"),
                 ));
             }
-            self.icc_written = true;
+            *written = true;
         }
         if self.next_level == 0 {
             let bytes = chunk::encode(tag, payload).ok_or_else(|| too_long(payload.len()))?;
@@ -216,6 +224,12 @@ impl<W: Write> ContainerWriter<W> {
     /// Writes an ICC profile chunk (`i`). At most one per file.
     pub fn write_icc(&mut self, profile: &[u8]) -> Result<(), crate::Error> {
         self.write_ancillary(ICC, profile)
+    }
+
+    /// Writes an Exif chunk (`e`): the TIFF-structured Exif block (byte-order mark, IFDs), as
+    /// PNG's `eXIf`. At most one per file.
+    pub fn write_exif(&mut self, exif: &[u8]) -> Result<(), crate::Error> {
+        self.write_ancillary(EXIF, exif)
     }
 
     /// Writes a text chunk (`t`): `key` (non-empty, no 0x00), 0x00, `value`.

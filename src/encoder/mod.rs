@@ -75,6 +75,10 @@ pub struct EncodeOptions {
     pub frame: Option<Frame>,
     /// ICC profile to store (after the first level).
     pub icc: Option<Vec<u8>>,
+    /// Exif metadata to store (after the first level): the TIFF-structured block, as
+    /// `image`'s `ImageDecoder::exif_metadata` gives it. Its orientation should say upright
+    /// if the pixels are (`image::metadata::Orientation::remove_from_exif_chunk`).
+    pub exif: Option<Vec<u8>>,
     /// Text comments to store (after the first level).
     pub text: Vec<(String, String)>,
 }
@@ -90,6 +94,7 @@ impl Default for EncodeOptions {
             first_level: crate::container::DEFAULT_FIRST_LEVEL,
             frame: None,
             icc: None,
+            exif: None,
             text: Vec::new(),
         }
     }
@@ -248,6 +253,9 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
         if k == 0 {
             if let Some(icc) = &opts.icc {
                 w.write_icc(icc)?;
+            }
+            if let Some(exif) = &opts.exif {
+                w.write_exif(exif)?;
             }
             for (key, value) in &opts.text {
                 w.write_text(key, value)?;
