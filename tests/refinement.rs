@@ -186,6 +186,21 @@ fn targets_are_kept() {
             bytes.len()
         );
     }
+    // A camera's Exif, last in the file, is inside the size too, and every byte before it
+    // is the picture's: a cut just before it draws the same picture.
+    let exif = [b"MM\0*\0\0\0\x08\0\0\0\0\0\0".as_slice(), &[7; 3000]].concat();
+    let opts = EncodeOptions {
+        target: Target::Size(4000),
+        exif: Some(exif.clone()),
+        ..Default::default()
+    };
+    let bytes = encode(&img, &opts).unwrap();
+    assert!(bytes.len() <= 4000, "{} bytes", bytes.len());
+    let whole = decode(&bytes, &DecodeOptions::default()).unwrap();
+    assert_eq!(whole.exif, Some(exif.clone()));
+    let before = bytes.len() - exif.len() - 7; // tag, two length bytes, CRC
+    let cut = decode(&bytes[..before], &DecodeOptions::default()).unwrap();
+    assert_eq!((cut.exif, cut.image), (None, whole.image));
 }
 
 /// The picture at another size is the image-size picture averaged over each output pixel

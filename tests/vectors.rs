@@ -240,8 +240,8 @@ fn vectors() -> Vec<Vector> {
         },
         Vector {
             name: "grey-8-text",
-            what: "grey, raw 8 bits, two text chunks (one with a UTF-8 value) and an Exif chunk \
-                   (`e`: orientation 1, big-endian) after level 0",
+            what: "grey, raw 8 bits, two text chunks after level 0 (one with a UTF-8 value), an \
+                   Exif chunk (`e`: orientation 1, big-endian) after the last level",
             image: grey(24, 24),
             opts: EncodeOptions {
                 text: vec![

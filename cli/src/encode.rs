@@ -80,8 +80,9 @@ pub struct EncodeArgs {
     /// without a profile means anyway.
     #[arg(long)]
     pub strip_icc: bool,
-    /// Drop the input's Exif metadata (camera, date, place). By default it is stored (after
-    /// the first level), its orientation set upright as the pixels are.
+    /// Drop the input's Exif metadata (camera, date, place). By default it is stored at the
+    /// end of the file (no preview waits for it), its orientation set upright as the pixels
+    /// are.
     #[arg(long)]
     pub strip_exif: bool,
     /// Also decode the file written (whole, at full size) and print its PSNR against the

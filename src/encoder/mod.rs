@@ -75,7 +75,8 @@ pub struct EncodeOptions {
     pub frame: Option<Frame>,
     /// ICC profile to store (after the first level).
     pub icc: Option<Vec<u8>>,
-    /// Exif metadata to store (after the first level): the TIFF-structured block, as
+    /// Exif metadata to store, at the end of the file (no preview waits for it; a file cut
+    /// short has none): the TIFF-structured block, as
     /// `image`'s `ImageDecoder::exif_metadata` gives it. Its orientation should say upright
     /// if the pixels are (`image::metadata::Orientation::remove_from_exif_chunk`).
     pub exif: Option<Vec<u8>>,
@@ -163,6 +164,12 @@ fn layout_and_pixels(image: &DynamicImage) -> (Layout, Cow<'_, [u8]>) {
             (false, false) => (Layout::Grey, other.to_luma8().into_raw().into()),
         },
     }
+}
+
+/// Bytes an Exif chunk of `exif` takes (tag, length, payload, CRC).
+fn exif_chunk_len(exif: &[u8]) -> u64 {
+    crate::container::chunk::encode(crate::container::chunk::EXIF, exif)
+        .map_or(0, |c| c.len() as u64)
 }
 
 /// Encodes an image to `.qcs` bytes.
@@ -254,9 +261,6 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             if let Some(icc) = &opts.icc {
                 w.write_icc(icc)?;
             }
-            if let Some(exif) = &opts.exif {
-                w.write_exif(exif)?;
-            }
             for (key, value) in &opts.text {
                 w.write_text(key, value)?;
             }
@@ -267,7 +271,8 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             Target::Lossless => Goal::Lossless,
             Target::Quality(q) => Goal::Key(quality_key(q)),
             Target::Size(bytes) => {
-                let used = w.bytes_written();
+                let exif = opts.exif.as_ref().map_or(0, |e| exif_chunk_len(e));
+                let used = w.bytes_written() + exif;
                 Goal::Bytes(usize::try_from(bytes.saturating_sub(used)).unwrap_or(usize::MAX))
             }
             Target::LevelsOnly => unreachable!("no refinement"),
@@ -287,6 +292,11 @@ pub fn encode_to<W: Write>(image: &DynamicImage, opts: &EncodeOptions, writer: W
             let segs: Vec<&[u8]> = layer.iter().map(Vec::as_slice).collect();
             w.write_layer(&coded.header, &segs)?;
         }
+    }
+    // Last: no preview needs it (the pixels are stored upright), and a camera's, often tens
+    // of kilobytes with its own thumbnail, would delay every preview after the first.
+    if let Some(exif) = &opts.exif {
+        w.write_exif(exif)?;
     }
     w.finish()?;
     Ok(())
