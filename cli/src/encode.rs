@@ -219,17 +219,13 @@ impl Encoded {
         if let Some(p) = self.psnr {
             let _ = write!(s, ", PSNR {p:.2} dB");
         }
-        match (self.icc, self.exif) {
-            (Some(i), Some(e)) => {
-                let _ = write!(s, " (with its {i}-byte ICC profile and {e}-byte Exif)");
-            }
-            (Some(i), None) => {
-                let _ = write!(s, " (with its {i}-byte ICC profile)");
-            }
-            (None, Some(e)) => {
-                let _ = write!(s, " (with its {e}-byte Exif)");
-            }
-            (None, None) => {}
+        let icc = self.icc.map(|n| format!("{n}-byte ICC profile"));
+        let kept: Vec<String> = [icc, self.exif.map(|n| format!("{n}-byte Exif"))]
+            .into_iter()
+            .flatten()
+            .collect();
+        if !kept.is_empty() {
+            let _ = write!(s, " (with its {})", kept.join(" and "));
         }
         s
     }
