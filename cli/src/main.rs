@@ -583,6 +583,12 @@ pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageForma
             path.display()
         )
     })?;
+    if !format.writing_enabled() {
+        return Err(usage!(
+            "cannot write {}: qcs writes no {format:?} (use .png, .jpg, .gif, .bmp, .tiff, .webp, .ppm, .pgm, .pam, .qoi or .tga)",
+            path.display()
+        ));
+    }
     if extension(path) == "pbm" {
         return Err(usage!(
             "cannot write {}: a PBM holds black and white only (use .pgm, .ppm or .pam)",

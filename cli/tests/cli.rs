@@ -939,6 +939,7 @@ fn every_usage_error_exits_2_and_every_exit_code_is_true() {
         (s(&["encode", ROCKET]), "no output"),
         (s(&["encode", ROCKET, ROCKET, "o.qcs"]), "3 paths"),
         (with(s(&["decode", "o.xyz"]), 1, &f), "unknown image format"),
+        (with(s(&["decode", "o.avif"]), 1, &f), "qcs writes no Avif"),
         (
             s(&["sites", "--width", "0", "--height", "5", "--count", "3"]),
             "from 1 to 65535",
