@@ -377,7 +377,13 @@ fn same_file(a: &Path, b: &Path) -> bool {
 }
 
 fn is_image(p: &Path) -> bool {
+    // Also the photos qcs cannot read (a phone's HEIC, JPEG XL, JPEG 2000): each is then
+    // reported with how to convert it, not passed over in silence.
+    let ext = p.extension().unwrap_or_default().to_ascii_lowercase();
     image::ImageFormat::from_path(p).is_ok()
+        || ["heic", "heif", "jxl", "jp2", "j2k"]
+            .iter()
+            .any(|e| ext == *e)
 }
 
 /// The images in the folder `dir` and its subfolders (by extension), sorted, each with its

@@ -132,11 +132,45 @@ fn pump(
 /// Refuses a source whose first bytes are no image format the `image` crate knows, before
 /// reading the rest.
 pub fn check_image_start(src: &mut Source) -> Result<()> {
-    let head = src.peek(64)?;
-    if let Err(e) = image::guess_format(head) {
-        return Err(e).with_context(|| format!("cannot read image {}", src.path.display()));
+    let path = src.path.clone();
+    check_image_head(src.peek(64)?, &path)
+}
+
+/// Refuses an image whose first bytes `head` are no format the `image` crate knows, naming
+/// the formats a camera or a phone writes that this build cannot read.
+pub fn check_image_head(head: &[u8], path: &std::path::Path) -> Result<()> {
+    let Err(e) = image::guess_format(head) else {
+        return Ok(());
+    };
+    let unreadable = unreadable_format(head).map_or(String::new(), |(name, how)| {
+        format!(": {name}, which qcs does not read; convert it to PNG or JPEG first{how}")
+    });
+    Err(e).with_context(|| format!("cannot read image {}{unreadable}", path.display()))
+}
+
+/// Formats `image` does not read, known by their first bytes, with a way to convert them.
+fn unreadable_format(head: &[u8]) -> Option<(&'static str, &'static str)> {
+    // ISO base media files: a box size, `ftyp`, then the major brand.
+    let brand = head
+        .get(4..12)
+        .filter(|b| b.starts_with(b"ftyp"))
+        .map(|b| &b[4..]);
+    match brand {
+        Some(b"heic" | b"heix" | b"hevc" | b"hevx" | b"heim" | b"heis" | b"mif1" | b"msf1") => {
+            Some((
+                "a HEIF/HEIC photo",
+                " (heif-convert IN OUT.jpg, from libheif)",
+            ))
+        }
+        Some(b"avif" | b"avis") => Some(("an AVIF picture", " (avifdec IN OUT.png)")),
+        _ if head.starts_with(&[0xff, 0x0a]) || head.starts_with(b"\0\0\0\x0cJXL ") => {
+            Some(("a JPEG XL picture", " (djxl IN OUT.png)"))
+        }
+        _ if head.starts_with(b"\0\0\0\x0cjP  ") || head.starts_with(&[0xff, 0x4f, 0xff, 0x51]) => {
+            Some(("a JPEG 2000 picture", " (opj_decompress -i IN -o OUT.png)"))
+        }
+        _ => None,
     }
-    Ok(())
 }
 
 /// The bytes of a file (or of standard input for `-`) to its end, refusing one longer than

@@ -537,13 +537,11 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
         )
     } else {
         let mut file = std::io::BufReader::new(std::fs::File::open(p).with_context(ctx_msg)?);
-        if file
-            .fill_buf()
-            .with_context(ctx_msg)?
-            .starts_with(&qcs::container::MAGIC)
-        {
+        let head = file.fill_buf().with_context(ctx_msg)?;
+        if head.starts_with(&qcs::container::MAGIC) {
             return Err(qcs_hint(p));
         }
+        input::check_image_head(head, p)?;
         file.rewind().with_context(ctx_msg)?;
         by_content(image::ImageReader::new(file), &ctx.limits)
     }

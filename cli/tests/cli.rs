@@ -1511,3 +1511,28 @@ fn a_deeper_input_is_said_to_be_stored_as_8_bits() {
     assert_eq!(c, Some(0), "{err}");
     assert!(!err.contains("bits per channel"), "{err}");
 }
+
+/// A photo format qcs does not read (a phone's HEIC) is named, with how to convert it, both
+/// given alone and found in a folder (where the others still encode).
+#[test]
+fn an_unreadable_photo_format_says_how_to_convert_it() {
+    let heic = scratch("IMG_0001.HEIC");
+    std::fs::write(&heic, b"\0\0\0\x18ftypheic\0\0\0\0mif1heic").expect("write");
+    let (c, err) = code(qcs().args(["encode"]).arg(&heic).arg(scratch("heic.qcs")));
+    assert_eq!(c, Some(3), "{err}");
+    assert!(
+        err.contains("a HEIF/HEIC photo, which qcs does not read"),
+        "{err}"
+    );
+    assert!(err.contains("heif-convert"), "{err}");
+    let dir = scratch("phone");
+    std::fs::create_dir_all(&dir).expect("dir");
+    std::fs::copy(&heic, dir.join("IMG_0002.heic")).expect("copy");
+    std::fs::copy(ROCKET, dir.join("rocket.png")).expect("copy");
+    let out = scratch("phone-out");
+    let (c, err) = code(qcs().args(["encode"]).arg(&dir).arg("--out-dir").arg(&out));
+    assert_eq!(c, Some(3), "{err}");
+    assert!(err.contains("1 of 2 files encoded"), "{err}");
+    assert!(err.contains("IMG_0002.heic: cannot read image"), "{err}");
+    assert!(out.join("rocket.qcs").exists());
+}
