@@ -23,6 +23,7 @@ mod decode;
 mod demo;
 mod encode;
 mod eval;
+mod exif;
 mod icc;
 mod info;
 mod input;
@@ -555,7 +556,7 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
     img.apply_orientation(orientation);
     // The pixels are upright now: so says the Exif kept, lest a viewer turn them again.
     if let Some(e) = &mut exif {
-        let _ = image::metadata::Orientation::remove_from_exif_chunk(e);
+        exif::upright(e);
     }
     Ok(Photo {
         image: img,
