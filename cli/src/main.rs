@@ -684,6 +684,11 @@ fn encode_image<T>(
     }
 }
 
+/// The quality of a JPEG output (`image`'s scale). At 75, its default, the JPEG of a dev
+/// photograph's default qcs file was 36.99 dB from the picture decoded, about as far as that
+/// picture is from the photograph; at 90, 41.34 dB (and 1.6× the bytes).
+const JPEG_QUALITY: u8 = 90;
+
 /// Encodes `img` in `format` into `sink` (a file whose extension is `ext`), with `meta` where
 /// the format can hold it. Returns what it could not hold.
 fn encode_into<W: std::io::Write + std::io::Seek>(
@@ -716,7 +721,11 @@ fn encode_into<W: std::io::Write + std::io::Seek>(
     };
     match format {
         ImageFormat::Png => with(img, png::PngEncoder::new(sink), meta),
-        ImageFormat::Jpeg => with(img, jpeg::JpegEncoder::new(sink), meta),
+        ImageFormat::Jpeg => with(
+            img,
+            jpeg::JpegEncoder::new_with_quality(sink, JPEG_QUALITY),
+            meta,
+        ),
         ImageFormat::Tiff => with(img, tiff::TiffEncoder::new(sink), meta),
         ImageFormat::WebP => with(img, webp::WebPEncoder::new_lossless(sink), meta),
         ImageFormat::Pnm => write_netpbm(img, ext, sink).map(|()| none),
