@@ -788,9 +788,9 @@ pub struct DecodeOptions {
     pub max_samples: Option<u64>,
     /// Use only the first this many bytes, as a cut download would.
     pub max_bytes: Option<usize>,
-    /// Render a thumbnail ([`DecodeOptions::thumbnail`]): from at most 16 samples per output
-    /// pixel, each pixel the mean of a square rendered at its subpixel centres. Off by
-    /// default: the picture at the pixel centres, from every sample (the spec's picture).
+    /// Render a thumbnail ([`DecodeOptions::thumbnail`]): from the refinement's coarse bands,
+    /// or, of levels alone, from at most 16 samples per output pixel. Off by default: the
+    /// spec's picture at the output size, from everything the file holds.
     pub thumbnail: bool,
     /// Resource limits.
     pub limits: Limits,
@@ -859,9 +859,9 @@ impl DecodeOptions {
     /// with the thumbnail, not the file.
     ///
     /// With a refinement (format version 3), it decodes only the coarse bands: those of the
-    /// deepest transform level at least twice the thumbnail's size (a 1/8-size thumbnail
-    /// decodes 1/16 of the coefficients), draws the picture two levels finer with the bands
-    /// between taken as zero, and averages it over each thumbnail pixel. The spec's picture at
+    /// deepest transform level at least twice the thumbnail's size, less a pixel (a 1/8-size
+    /// thumbnail decodes 1/16 of the coefficients), draws the image-size picture with the
+    /// finer bands taken as zero, and averages it over each thumbnail pixel. The spec's picture at
     /// that size ([`DecodeOptions::size`] alone) is the image-size picture averaged over each
     /// pixel, which decodes every band; the two differ by about 40 dB PSNR (README,
     /// *Thumbnails*).
