@@ -157,7 +157,17 @@ pub(crate) fn resample(
     }
     let ax = Axis::new(sw, dw, width, level);
     let ay = Axis::new(sh, dh, height, level);
-    let c = channels;
+    match channels {
+        1 => by_axes::<1>(pixels, sw, &ax, &ay),
+        2 => by_axes::<2>(pixels, sw, &ax, &ay),
+        3 => by_axes::<3>(pixels, sw, &ax, &ay),
+        _ => by_axes::<4>(pixels, sw, &ax, &ay),
+    }
+}
+
+/// [`resample`] of `C`-channel pixels (`sw` wide) along the two axes' taps.
+fn by_axes<const C: usize>(pixels: &[u8], sw: usize, ax: &Axis, ay: &Axis) -> Vec<u8> {
+    let (c, dw, dh) = (C, ax.taps.len(), ay.taps.len());
     let mut out = vec![0u8; dw * dh * c];
     // One axis at a time, exactly: a source row's sums under each output column's taps
     // (64-bit, unrounded), then those rows' sums under the output row's taps, rounded once:
@@ -173,13 +183,15 @@ pub(crate) fn resample(
         acc.fill(0);
         for &(y, wy) in ty {
             let src = &pixels[y * sw * c..(y + 1) * sw * c];
-            for (tx, sums) in ax.taps.iter().zip(row.chunks_exact_mut(c)) {
-                sums.fill(0);
+            for (tx, sums) in ax.taps.iter().zip(row.chunks_exact_mut(C)) {
+                let mut s = [0u64; C];
                 for &(x, wx) in tx {
-                    for (a, &v) in sums.iter_mut().zip(&src[x * c..(x + 1) * c]) {
+                    let px: &[u8; C] = src[x * C..][..C].try_into().expect("C channels");
+                    for (a, &v) in s.iter_mut().zip(px) {
                         *a += wx * v as u64;
                     }
                 }
+                sums.copy_from_slice(&s);
             }
             for (a, &r) in acc.iter_mut().zip(&row) {
                 *a += wy * r;
