@@ -173,8 +173,9 @@ struct Encoded {
     warnings: Vec<String>,
     /// With `--psnr`: the PSNR of the whole file decoded at full size, in dB.
     psnr: Option<f64>,
-    /// Where the levels end and the refinement begins (byte offset), and its layers.
-    refinement: Option<(u64, u32)>,
+    /// Where the levels end and the refinement begins and ends (byte offsets; metadata may
+    /// follow it), and its layers.
+    refinement: Option<(u64, u64, u32)>,
 }
 
 impl Encoded {
@@ -196,11 +197,11 @@ impl Encoded {
                 hd.coding
             );
         }
-        if let Some((at, layers)) = self.refinement {
+        if let Some((at, end, layers)) = self.refinement {
             let _ = write!(
                 s,
                 "levels in bytes 0..{at}, then a refinement of {} bytes in {layers} layer{}; ",
-                self.output.saturating_sub(at),
+                end - at,
                 if layers == 1 { "" } else { "s" }
             );
         }
@@ -332,6 +333,16 @@ fn encode_file(
                 input.display()
             )
         })?;
+    if let qcs::Target::Size(size) = opts.target {
+        if bytes.len() as u64 > size {
+            warnings.push(format!(
+                "qcs: {}: {} bytes, over --target-size {size}: the levels and the metadata \
+                 alone take more (--strip-exif, --strip-icc)",
+                input.display(),
+                bytes.len()
+            ));
+        }
+    }
     let psnr = match flags.psnr {
         false => None,
         true => {
@@ -362,8 +373,14 @@ fn encode_file(
         psnr,
         refinement: {
             let info = qcs::container::inspect(&bytes);
+            // It ends where the chunk after its last layer (the Exif) begins.
+            let last = info.chunks.iter().rposition(|c| c.chunk.tag == b'R');
+            let after = last.and_then(|i| info.chunks.get(i + 1));
+            let end = after.map_or(bytes.len() as u64, |c| c.chunk.offset);
+            let layers = info.refinement.map(|r| r.layers);
             info.refinement_offset
-                .zip(info.refinement.map(|r| r.layers))
+                .zip(layers)
+                .map(|(at, n)| (at, end, n))
         },
     })
 }

@@ -622,6 +622,16 @@ fn orientation_and_colour_profile_survive_a_round_trip() {
     assert!(dec.status.success(), "{dec:?}");
     assert_eq!(png_metadata(&back), (Some(icc.clone()), None));
 
+    // A size the metadata alone exceeds: written, with a warning.
+    let (c, err) = code(
+        qcs()
+            .args(["encode", "--target-size", "60"])
+            .arg(&src)
+            .arg(&stripped),
+    );
+    assert_eq!(c, Some(0), "{err}");
+    assert!(err.contains("over --target-size 60"), "{err}");
+
     // A format without profiles: written, with a warning.
     let bmp = scratch("camera-back.bmp");
     let dec = run(qcs().arg("decode").arg(&file).arg(&bmp));
