@@ -381,20 +381,15 @@ fn frames(
     Ok(())
 }
 
-/// Byte offsets at which each level chunk and each refinement layer ends (where the next
-/// chunk starts).
+/// Byte offsets at which each level chunk and each refinement layer ends, with the metadata
+/// chunks after it: where the next level or layer starts, or the file ends. (A frame then
+/// carries the ICC profile that follows level 0, and the last one the Exif at the end.)
 fn level_ends(bytes: &[u8]) -> Vec<usize> {
     let ins = qcs::container::inspect(bytes);
-    let starts: Vec<u64> = ins
-        .chunks
-        .iter()
+    let pictures: Vec<u64> = (ins.chunks.iter())
+        .filter(|c| c.level.is_some() || c.layer.is_some())
         .map(|c| c.chunk.offset)
         .chain([ins.file_len])
         .collect();
-    ins.chunks
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.level.is_some() || c.layer.is_some())
-        .map(|(i, _)| starts[i + 1] as usize)
-        .collect()
+    pictures[1..].iter().map(|&end| end as usize).collect()
 }

@@ -602,6 +602,23 @@ fn orientation_and_colour_profile_survive_a_round_trip() {
         png_metadata(&back),
         (Some(icc.clone()), Some(camera_exif(1)))
     );
+    // Every frame carries the profile (it follows level 0, and so does the first frame's
+    // cut); the last, the whole file, the Exif.
+    let frames = scratch("camera-frames");
+    let dec = run(qcs()
+        .args(["-q", "decode"])
+        .arg(&file)
+        .arg("--frames")
+        .arg(&frames));
+    assert!(dec.status.success(), "{dec:?}");
+    let mut paths: Vec<_> = (std::fs::read_dir(&frames).expect("frames"))
+        .map(|e| e.expect("entry").path())
+        .collect();
+    paths.sort();
+    for p in &paths {
+        assert_eq!(png_metadata(p).0, Some(icc.clone()), "{}", p.display());
+    }
+    assert_eq!(png_metadata(&last_frame(&frames)).1, Some(camera_exif(1)));
 
     // Dropped on request.
     let stripped = scratch("camera-stripped.qcs");
