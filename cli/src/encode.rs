@@ -373,14 +373,10 @@ fn encode_file(
         psnr,
         refinement: {
             let info = qcs::container::inspect(&bytes);
-            // It ends where the chunk after its last layer (the Exif) begins.
-            let last = info.chunks.iter().rposition(|c| c.chunk.tag == b'R');
-            let after = last.and_then(|i| info.chunks.get(i + 1));
-            let end = after.map_or(bytes.len() as u64, |c| c.chunk.offset);
-            let layers = info.refinement.map(|r| r.layers);
-            info.refinement_offset
+            let layers = info.refinement.as_ref().map(|r| r.layers);
+            info.refinement_bytes()
                 .zip(layers)
-                .map(|(at, n)| (at, end, n))
+                .map(|(r, n)| (r.start, r.end, n))
         },
     })
 }

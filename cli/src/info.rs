@@ -105,7 +105,7 @@ pub fn info(a: InfoArgs, ctx: &Ctx) -> Result<()> {
         say!(
             "refinement: from byte {at} (the levels end there), {} bytes: {wavelet}, {} levels, \
              {} fraction bits, bit-planes {:?}, {passes}",
-            ins.file_len.saturating_sub(at),
+            ins.refinement_bytes().map_or(0, |r| r.end - r.start),
             r.levels,
             r.fraction_bits,
             r.bitplanes,

@@ -259,6 +259,29 @@ impl std::fmt::Display for ChunkStatus {
     }
 }
 
+impl Inspection {
+    /// The bytes of the refinement present in the file: from where the levels end to where
+    /// the chunk after its last layer present begins (metadata may follow it, as the Exif
+    /// does), or to the file's end. `None` for a file without a refinement.
+    ///
+    /// ```
+    /// let img = image::DynamicImage::ImageRgb8(image::RgbImage::new(40, 30));
+    /// let opts = qcs::EncodeOptions { exif: Some(b"II*\0\x08\0\0\0\0\0".to_vec()), ..Default::default() };
+    /// let bytes = qcs::encode(&img, &opts)?;
+    /// let ins = qcs::container::inspect(&bytes);
+    /// let r = ins.refinement_bytes().expect("a refinement");
+    /// assert_eq!(r.start, ins.refinement_offset.unwrap());
+    /// assert_eq!(r.end as usize, bytes.len() - (1 + 1 + 10 + 4)); // the Exif chunk follows
+    /// # Ok::<(), qcs::Error>(())
+    /// ```
+    pub fn refinement_bytes(&self) -> Option<std::ops::Range<u64>> {
+        let start = self.refinement_offset?;
+        let last = self.chunks.iter().rposition(|c| c.layer.is_some());
+        let after = last.and_then(|i| self.chunks.get(i + 1));
+        Some(start..after.map_or(self.file_len, |c| c.chunk.offset))
+    }
+}
+
 /// The listing `qcs info` prints: header fields, then one line per level and per chunk.
 ///
 /// ```
