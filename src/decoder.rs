@@ -488,6 +488,12 @@ impl StreamDecoder {
         })
     }
 
+    /// Copies of the ICC profile and the Exif, for a [`DecodedImage`].
+    fn owned_metadata(&self) -> (Option<Vec<u8>>, Option<Vec<u8>>) {
+        let icc = self.icc_profile().map(<[u8]>::to_vec);
+        (icc, self.exif().map(<[u8]>::to_vec))
+    }
+
     /// Sites (exact lattice point and pixel position) and colours (in the file's layout) of
     /// the first `k` available samples, e.g. for the stylized renderers.
     pub fn samples(&mut self, k: u64) -> (&[Site], &[u8]) {
@@ -563,6 +569,7 @@ impl StreamDecoder {
         }
         let pixels = set.render(method, width, height);
         self.set = Some(set);
+        let (icc, exif) = self.owned_metadata();
         let decoded = DecodedImage {
             image: to_image(h.layout, width, height, pixels),
             samples_used: n,
@@ -570,8 +577,8 @@ impl StreamDecoder {
             levels_complete: self.levels_within(&h, n),
             is_final: n == h.total_samples && self.is_complete() && !h.refinement,
             refined: false,
-            icc: self.icc_profile().map(<[u8]>::to_vec),
-            exif: self.exif().map(<[u8]>::to_vec),
+            icc,
+            exif,
         };
         Ok(Picture::of(decoded))
     }
@@ -637,10 +644,7 @@ impl StreamDecoder {
         last: bool,
     ) -> Option<DecodedImage> {
         let complete = self.is_complete();
-        let (icc, exif) = (
-            self.icc_profile().map(<[u8]>::to_vec),
-            self.exif().map(<[u8]>::to_vec),
-        );
+        let (icc, exif) = self.owned_metadata();
         let r = self.refinement.as_mut()?;
         let pixels = if thumbnail {
             r.render_thumbnail(width, height, last)
@@ -736,10 +740,7 @@ impl StreamDecoder {
         for (k, s) in sites.iter().enumerate().skip(have) {
             set.push_site(s, &col[k * c..k * c + c]);
         }
-        let (icc, exif) = (
-            self.icc_profile().map(<[u8]>::to_vec),
-            self.exif().map(<[u8]>::to_vec),
-        );
+        let (icc, exif) = self.owned_metadata();
         let (verified, levels) = (self.verified, self.levels_within(&h, used));
         drop(self);
         set.settle(method);

@@ -118,8 +118,8 @@ impl ImageDecoder for QcsImageDecoder {
         })
     }
 
-    /// The file's Exif metadata (its chunk follows the first level), as `image`'s decoders
-    /// of other formats give it.
+    /// The file's Exif metadata (its chunk ends the file), as `image`'s decoders of other
+    /// formats give it.
     ///
     /// ```
     /// use image::ImageDecoder;

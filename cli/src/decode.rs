@@ -234,11 +234,7 @@ pub fn decode(a: DecodeArgs, ctx: &Ctx) -> Result<()> {
             d.levels_complete,
         )?;
     }
-    let meta = super::Meta {
-        icc: d.icc.as_deref(),
-        exif: d.exif.as_deref(),
-    };
-    let dropped = super::save_image_with(&d.image, out, meta)?;
+    let dropped = super::save_image_with(&d.image, out, super::Meta::of(&d))?;
     if dropped.icc {
         super::warn(format!(
             "{} cannot hold the file's ICC colour profile: its colours are not sRGB and will \
@@ -368,11 +364,7 @@ fn frames(
             warned = true;
         }
         // PNG holds the ICC profile and the Exif.
-        let meta = super::Meta {
-            icc: d.icc.as_deref(),
-            exif: d.exif.as_deref(),
-        };
-        super::save_image_with(&d.image, &path, meta)?;
+        super::save_image_with(&d.image, &path, super::Meta::of(d))?;
         eprintln_unless(
             ctx.quiet,
             format!("{}: {} samples", path.display(), d.samples_used),

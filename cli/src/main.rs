@@ -565,6 +565,9 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
     })
 }
 
+/// The output extensions qcs writes, for its usage errors.
+const WRITES: &str = "use .png, .jpg, .gif, .bmp, .tiff, .webp, .ppm, .pgm, .pam, .qoi or .tga";
+
 /// The image format an output path's extension names; PNG for `-` (standard output, checked
 /// with [`check_output`]). An unknown extension is a usage error, checked before the work.
 pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageFormat> {
@@ -578,13 +581,13 @@ pub fn output_format(path: &std::path::Path) -> anyhow::Result<image::ImageForma
             false => "",
         };
         usage!(
-            "cannot write {}: unknown image format (use .png, .jpg, .gif, .bmp, .tiff, .webp, .ppm, .pgm, .pam, .qoi or .tga){hint}",
+            "cannot write {}: unknown image format ({WRITES}){hint}",
             path.display()
         )
     })?;
     if !format.writing_enabled() {
         return Err(usage!(
-            "cannot write {}: qcs writes no {format:?} (use .png, .jpg, .gif, .bmp, .tiff, .webp, .ppm, .pgm, .pam, .qoi or .tga)",
+            "cannot write {}: qcs writes no {format:?} ({WRITES})",
             path.display()
         ));
     }
@@ -617,6 +620,16 @@ pub struct Meta<'a> {
     pub icc: Option<&'a [u8]>,
     /// Exif metadata: PNG, JPEG and WebP hold it.
     pub exif: Option<&'a [u8]>,
+}
+
+impl<'a> Meta<'a> {
+    /// The metadata of a decoded picture.
+    pub fn of(d: &'a qcs::DecodedImage) -> Self {
+        Meta {
+            icc: d.icc.as_deref(),
+            exif: d.exif.as_deref(),
+        }
+    }
 }
 
 /// What of a [`Meta`] an output's format could not hold.

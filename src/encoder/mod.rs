@@ -168,8 +168,8 @@ fn layout_and_pixels(image: &DynamicImage) -> (Layout, Cow<'_, [u8]>) {
 
 /// Bytes an Exif chunk of `exif` takes (tag, length, payload, CRC).
 fn exif_chunk_len(exif: &[u8]) -> u64 {
-    crate::container::chunk::encode(crate::container::chunk::EXIF, exif)
-        .map_or(0, |c| c.len() as u64)
+    let len = exif.len() as u64;
+    1 + crate::container::varint::encoded_len(len) as u64 + len + 4
 }
 
 /// Encodes an image to `.qcs` bytes.
