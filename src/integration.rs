@@ -169,7 +169,8 @@ impl ImageDecoder for QcsImageDecoder {
 }
 
 /// Registers `.qcs` with the `image` crate: by extension and by signature (`qc` and a format
-/// byte of version 2).
+/// byte of version 2 or 3), so that `image::open` and `ImageReader::with_guessed_format` read
+/// `.qcs` files whatever their names.
 /// Returns `false` if a decoder for the extension was already registered.
 ///
 /// ```
@@ -183,9 +184,19 @@ impl ImageDecoder for QcsImageDecoder {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn register_image_hooks() -> bool {
-    image::hooks::register_format_detection_hook("qcs".into(), b"qc\x40", Some(b"\xFF\xFF\xE0"));
-    image::hooks::register_decoding_hook(
+    let new = image::hooks::register_decoding_hook(
         "qcs".into(),
         Box::new(|r| Ok(Box::new(QcsImageDecoder::new(r)?))),
-    )
+    );
+    if new {
+        // The format byte's top three bits are the version (spec/format.md, the header).
+        for signature in [b"qc\x40", b"qc\x60"] {
+            image::hooks::register_format_detection_hook(
+                "qcs".into(),
+                signature,
+                Some(b"\xFF\xFF\xE0"),
+            );
+        }
+    }
+    new
 }

@@ -425,3 +425,28 @@ fn parallel_one_shot_decode_equals_the_single_threaded_one() {
         }
     }
 }
+
+/// With the hooks registered, `image` knows a .qcs file by its first bytes whatever its name,
+/// in both versions, and reads the picture `qcs::decode` draws.
+#[test]
+fn image_knows_qcs_files_by_content() {
+    qcs::register_image_hooks();
+    let img = image::open(format!("{}/assets/rocket.png", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let img = img.thumbnail_exact(96, 64);
+    for opts in [EncodeOptions::default(), levels_only()] {
+        let bytes = encode(&img, &opts).unwrap();
+        let reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
+            .with_guessed_format()
+            .unwrap();
+        let back = reader
+            .decode()
+            .unwrap_or_else(|e| panic!("version {}: {e}", bytes[2] >> 5));
+        let d = decode(&bytes, &DecodeOptions::default()).unwrap();
+        assert_eq!(
+            back.to_rgb8(),
+            d.image.to_rgb8(),
+            "version {}",
+            bytes[2] >> 5
+        );
+    }
+}
