@@ -11,10 +11,16 @@ fn qcs() -> Command {
     Command::new(env!("CARGO_BIN_EXE_qcs"))
 }
 
+/// A path in this run's scratch folder, in the target directory (emptied at the run's start).
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("qcs-cli-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir.join(name)
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch dir");
+        dir
+    })
+    .join(name)
 }
 
 fn run(cmd: &mut Command) -> Output {
