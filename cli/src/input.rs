@@ -136,12 +136,17 @@ pub fn check_image_start(src: &mut Source) -> Result<()> {
     check_image_head(src.peek(64)?, &path)
 }
 
-/// Refuses an image whose first bytes `head` are no format the `image` crate knows, naming
-/// the formats a camera or a phone writes that this build cannot read.
+/// Refuses an image whose first bytes `head` are no format the `image` crate knows (and whose
+/// extension names none: a TGA has no signature), naming the formats a camera or a phone
+/// writes that this build cannot read.
 pub fn check_image_head(head: &[u8], path: &std::path::Path) -> Result<()> {
     let Err(e) = image::guess_format(head) else {
         return Ok(());
     };
+    let by_name = image::ImageFormat::from_path(path).is_ok_and(|f| f.reading_enabled());
+    if by_name && unreadable_format(head).is_none() {
+        return Ok(());
+    }
     let unreadable = unreadable_format(head).map_or(String::new(), |(name, how)| {
         format!(": {name}, which qcs does not read; convert it to PNG or JPEG first{how}")
     });

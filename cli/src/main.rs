@@ -504,7 +504,8 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
     use image::ImageDecoder;
     use std::io::{BufRead, Seek};
     let ctx_msg = || format!("cannot read image {}", p.display());
-    /// A decoder for the image `r` holds, its format guessed from its first bytes.
+    /// A decoder for the image `r` holds, its format guessed from its first bytes (or, when they
+    /// name none, the one `r` was given).
     fn by_content<'a, R: BufRead + Seek + 'a>(
         r: image::ImageReader<R>,
         limits: &qcs::Limits,
@@ -544,7 +545,12 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
         }
         input::check_image_head(head, p)?;
         file.rewind().with_context(ctx_msg)?;
-        by_content(image::ImageReader::new(file), &ctx.limits)
+        // The extension's format stands when the content names none (a TGA has no signature).
+        let mut reader = image::ImageReader::new(file);
+        if let Ok(format) = image::ImageFormat::from_path(p) {
+            reader.set_format(format);
+        }
+        by_content(reader, &ctx.limits)
     }
     .with_context(ctx_msg)?;
     let icc = decoder.icc_profile().ok().flatten();
