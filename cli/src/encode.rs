@@ -210,7 +210,8 @@ impl Encoded {
             let _ = write!(s, " (from {n})");
         }
         let _ = write!(s, ", {:.3} bits per pixel", bits / px);
-        if let Some(hd) = &self.header {
+        // Of a file of levels only: the samples carry the whole picture.
+        if let (Some(hd), None) = (&self.header, self.refinement) {
             let _ = write!(
                 s,
                 ", {:.2} per sample",

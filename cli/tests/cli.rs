@@ -1369,7 +1369,7 @@ fn sizes_warnings_folders_and_limits() {
 }
 
 /// `qcs encode` says what it made: samples, levels, where the refinement begins, bytes, bits
-/// per pixel and per sample, and with `--psnr` the PSNR of the whole file; the limits and
+/// per pixel (and per sample, of a file of levels only), and with `--psnr` the PSNR of the whole file; the limits and
 /// `--threads` are flags.
 #[test]
 fn encode_says_what_it_made() {
@@ -1396,12 +1396,14 @@ fn encode_says_what_it_made() {
             std::fs::metadata(ROCKET).expect("len").len()
         ),
         format!("{:.3} bits per pixel", n as f64 * 8.0 / (480.0 * 320.0)),
-        format!("{:.2} per sample", n as f64 * 8.0 / 64.0),
         format!("PSNR {psnr:.2} dB"),
     ];
     for w in &want {
         assert!(err.contains(w.as_str()), "{w:?} in {err}");
     }
+    // Bits per sample only of a file of levels only (in a refinement's, 64 samples are a
+    // sketch and the bits are the refinement's).
+    assert!(!err.contains("per sample"), "{err}");
     // A lower sample limit caps the default density of a file of levels only, and says so.
     let out = run(qcs()
         .args(["encode", "--levels-only", "--max-samples", "5000"])
@@ -1410,8 +1412,11 @@ fn encode_says_what_it_made() {
     assert!(out.status.success(), "{out:?}");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("5000 samples, fewer than the 38400"), "{err}");
-    let h = qcs::container::inspect(&std::fs::read(&out_file).expect("read")).header;
+    let levels = std::fs::read(&out_file).expect("read");
+    let h = qcs::container::inspect(&levels).header;
     assert_eq!(h.expect("header").total_samples, 5000);
+    let per_sample = format!("{:.2} per sample", levels.len() as f64 * 8.0 / 5000.0);
+    assert!(err.contains(&per_sample), "{per_sample} in {err}");
     // One thread draws the same picture.
     let (one, two) = (scratch("made-1.png"), scratch("made-2.png"));
     for (t, png) in [("1", &one), ("2", &two)] {
