@@ -246,6 +246,7 @@ fn encode_file(
         image: img,
         icc,
         exif,
+        animated,
     } = super::read_image(input, ctx)?;
     let mut opts = opts.clone();
     opts.icc = icc.filter(|icc| !flags.strip_icc && !super::icc::is_srgb(icc));
@@ -292,6 +293,12 @@ fn encode_file(
     if bits > 8 {
         warnings.push(format!(
             "qcs: {}: {bits} bits per channel, stored as 8 (qcs keeps 8-bit pictures)",
+            input.display()
+        ));
+    }
+    if animated {
+        warnings.push(format!(
+            "qcs: {}: an animation; qcs stores its first frame",
             input.display()
         ));
     }

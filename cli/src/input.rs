@@ -153,6 +153,79 @@ pub fn check_image_head(head: &[u8], path: &std::path::Path) -> Result<()> {
     Err(e).with_context(|| format!("cannot read image {}{unreadable}", path.display()))
 }
 
+/// Whether the image `r` holds is an animation (a GIF of more than one frame, an APNG, an
+/// animated WebP), of which qcs encodes the first frame. No pixel is decoded: a GIF's blocks
+/// are skipped through to a second image; an unreadable one is no animation (its decoder
+/// will say what is wrong).
+pub fn is_animation<R: std::io::BufRead + std::io::Seek>(mut r: R) -> bool {
+    use image::ImageFormat as F;
+    let Ok(format) = r.fill_buf().map(image::guess_format) else {
+        return false;
+    };
+    match format {
+        Ok(F::Gif) => gif_has_two_images(r).unwrap_or(false),
+        Ok(F::Png) => {
+            image::codecs::png::PngDecoder::new(r).is_ok_and(|d| d.is_apng().unwrap_or(false))
+        }
+        Ok(F::WebP) => image::codecs::webp::WebPDecoder::new(r).is_ok_and(|d| d.has_animation()),
+        _ => false,
+    }
+}
+
+/// Whether a GIF has a second image descriptor (the GIF89a block structure: a screen
+/// descriptor and colour table, then extensions and images, each image's data in sub-blocks).
+fn gif_has_two_images(mut r: impl Read) -> std::io::Result<bool> {
+    fn skip(r: &mut impl Read, n: u64) -> std::io::Result<()> {
+        match std::io::copy(&mut r.take(n), &mut std::io::sink())? {
+            k if k == n => Ok(()),
+            _ => Err(std::io::ErrorKind::UnexpectedEof.into()),
+        }
+    }
+    fn byte(r: &mut impl Read) -> std::io::Result<u8> {
+        let mut b = [0];
+        r.read_exact(&mut b).map(|()| b[0])
+    }
+    /// Skips a colour table if `flags` (a descriptor's packed byte) says one follows.
+    fn table(r: &mut impl Read, flags: u8) -> std::io::Result<()> {
+        match flags & 0x80 {
+            0 => Ok(()),
+            _ => skip(r, 3 << ((flags & 7) + 1)),
+        }
+    }
+    fn sub_blocks(r: &mut impl Read) -> std::io::Result<()> {
+        loop {
+            match byte(r)? {
+                0 => return Ok(()),
+                n => skip(r, n as u64)?,
+            }
+        }
+    }
+    let mut screen = [0; 13];
+    r.read_exact(&mut screen)?;
+    table(&mut r, screen[10])?;
+    let mut images = 0;
+    loop {
+        match byte(&mut r)? {
+            0x2c => {
+                images += 1;
+                if images == 2 {
+                    return Ok(true);
+                }
+                let mut image = [0; 9];
+                r.read_exact(&mut image)?;
+                table(&mut r, image[8])?;
+                byte(&mut r)?; // the LZW code size
+                sub_blocks(&mut r)?;
+            }
+            0x21 => {
+                byte(&mut r)?; // the extension's label
+                sub_blocks(&mut r)?;
+            }
+            _ => return Ok(false), // the trailer (0x3b), or not a GIF
+        }
+    }
+}
+
 /// Formats `image` does not read, known by their first bytes, with a way to convert them.
 fn unreadable_format(head: &[u8]) -> Option<(&'static str, &'static str)> {
     // ISO base media files: a box size, `ftyp`, then the major brand.

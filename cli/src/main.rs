@@ -491,6 +491,8 @@ pub struct Photo {
     pub image: image::DynamicImage,
     pub icc: Option<Vec<u8>>,
     pub exif: Option<Vec<u8>>,
+    /// The input was an animation, of which `image` is the first frame.
+    pub animated: bool,
 }
 
 /// [`open_image`], and the image's ICC colour profile and Exif metadata if it has them (the
@@ -526,6 +528,7 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
             p.display()
         )
     };
+    let animated;
     let mut decoder = if is_stdio(p) {
         let mut src = input::Source::open(p)?;
         if src.peek(2)?.starts_with(&qcs::container::MAGIC) {
@@ -533,6 +536,7 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
         }
         input::check_image_start(&mut src)?;
         let bytes = input::read_all(src, ctx)?;
+        animated = input::is_animation(std::io::Cursor::new(&bytes));
         by_content(
             image::ImageReader::new(std::io::Cursor::new(bytes)),
             &ctx.limits,
@@ -544,6 +548,7 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
             return Err(qcs_hint(p));
         }
         input::check_image_head(head, p)?;
+        animated = input::is_animation(&mut file);
         file.rewind().with_context(ctx_msg)?;
         // The extension's format stands when the content names none (a TGA has no signature).
         let mut reader = image::ImageReader::new(file);
@@ -568,6 +573,7 @@ pub fn read_image(p: &std::path::Path, ctx: &Ctx) -> anyhow::Result<Photo> {
         image: img,
         icc,
         exif,
+        animated,
     })
 }
 

@@ -1607,3 +1607,41 @@ fn every_written_format_reads_back() {
         }
     }
 }
+
+/// An animated GIF is stored as its first frame, and `qcs encode` says so (given as a file or
+/// piped); a GIF of one frame gets no such warning.
+#[test]
+fn an_animation_is_said_to_be_stored_as_its_first_frame() {
+    let frame = |v: u8| {
+        let rgba = image::RgbaImage::from_fn(24, 16, |x, y| {
+            image::Rgba([v, x as u8 * 9, y as u8 * 13, 255])
+        });
+        image::Frame::new(rgba)
+    };
+    let gif = |name: &str, frames: Vec<image::Frame>| {
+        let path = scratch(name);
+        let mut bytes = Vec::new();
+        image::codecs::gif::GifEncoder::new(&mut bytes)
+            .encode_frames(frames)
+            .expect("a GIF");
+        std::fs::write(&path, bytes).expect("write");
+        path
+    };
+    let anim = gif("anim.gif", vec![frame(10), frame(200), frame(90)]);
+    let still = gif("still.gif", vec![frame(10)]);
+    let says = "an animation; qcs stores its first frame";
+    let (c, err) = code(qcs().args(["encode"]).arg(&anim).arg(scratch("anim.qcs")));
+    assert_eq!(c, Some(0), "{err}");
+    assert!(err.contains(says), "{err}");
+    let piped = piped(
+        qcs().args(["encode", "-"]).arg(scratch("anim-pipe.qcs")),
+        &std::fs::read(&anim).expect("read"),
+    );
+    assert!(
+        String::from_utf8_lossy(&piped.stderr).contains(says),
+        "{piped:?}"
+    );
+    let (c, err) = code(qcs().args(["encode"]).arg(&still).arg(scratch("still.qcs")));
+    assert_eq!(c, Some(0), "{err}");
+    assert!(!err.contains("animation"), "{err}");
+}
