@@ -171,8 +171,12 @@ fn by_axes<const C: usize>(pixels: &[u8], sw: usize, ax: &Axis, ay: &Axis) -> Ve
     let mut out = vec![0u8; dw * dh * c];
     // One axis at a time, exactly: a source row's sums under each output column's taps
     // (64-bit, unrounded), then those rows' sums under the output row's taps, rounded once:
-    // the same sums as the products of the two taps, at a fraction of the work.
-    let mut row = vec![0u64; dw * c];
+    // the same sums as the products of the two taps, at a fraction of the work. Output rows
+    // take source rows in increasing order, neighbours sharing some: each row's sums are
+    // made once, into a ring that holds an output row's worth of them and the next one's.
+    let ring = ay.taps.iter().map(Vec::len).max().unwrap_or(0) + 1;
+    let mut sums = vec![0u64; ring * dw * c];
+    let mut held = vec![usize::MAX; ring];
     let mut acc = vec![0u64; dw * c];
     let x_total: Vec<u64> = ax
         .taps
@@ -182,18 +186,22 @@ fn by_axes<const C: usize>(pixels: &[u8], sw: usize, ax: &Axis, ay: &Axis) -> Ve
     for (ty, out) in ay.taps.iter().zip(out.chunks_exact_mut(dw * c)) {
         acc.fill(0);
         for &(y, wy) in ty {
-            let src = &pixels[y * sw * c..(y + 1) * sw * c];
-            for (tx, sums) in ax.taps.iter().zip(row.chunks_exact_mut(C)) {
-                let mut s = [0u64; C];
-                for &(x, wx) in tx {
-                    let px: &[u8; C] = src[x * C..][..C].try_into().expect("C channels");
-                    for (a, &v) in s.iter_mut().zip(px) {
-                        *a += wx * v as u64;
+            let row = &mut sums[(y % ring) * dw * c..][..dw * c];
+            if held[y % ring] != y {
+                held[y % ring] = y;
+                let src = &pixels[y * sw * c..(y + 1) * sw * c];
+                for (tx, sums) in ax.taps.iter().zip(row.chunks_exact_mut(C)) {
+                    let mut s = [0u64; C];
+                    for &(x, wx) in tx {
+                        let px: &[u8; C] = src[x * C..][..C].try_into().expect("C channels");
+                        for (a, &v) in s.iter_mut().zip(px) {
+                            *a += wx * v as u64;
+                        }
                     }
+                    sums.copy_from_slice(&s);
                 }
-                sums.copy_from_slice(&s);
             }
-            for (a, &r) in acc.iter_mut().zip(&row) {
+            for (a, &r) in acc.iter_mut().zip(&*row) {
                 *a += wy * r;
             }
         }
