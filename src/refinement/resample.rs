@@ -66,6 +66,31 @@ impl Axis {
             .collect();
         Axis { taps }
     }
+
+    /// The taps as windows of one length `k` over `src` samples: per output pixel, the first
+    /// sample of its window, and all the weights, `k` per pixel (zero where the pixel has no
+    /// tap). A window stays within the samples.
+    fn windows(&self, src: usize) -> (Vec<usize>, usize, Vec<u64>) {
+        let span = |t: &[(usize, u64)]| t.last().map_or(0, |l| l.0 + 1 - t[0].0);
+        let k = self
+            .taps
+            .iter()
+            .map(|t| span(t))
+            .max()
+            .unwrap_or(0)
+            .min(src);
+        let mut weights = vec![0; self.taps.len() * k];
+        let starts = (self.taps.iter().zip(weights.chunks_exact_mut(k.max(1))))
+            .map(|(t, w)| {
+                let start = t.first().map_or(0, |f| f.0).min(src - k);
+                for &(x, wx) in t {
+                    w[x - start] = wx;
+                }
+                start
+            })
+            .collect();
+        (starts, k, weights)
+    }
 }
 
 /// The picture synthesised from a low band alone (the `from` finer levels' bands taken as
@@ -157,25 +182,71 @@ pub(crate) fn resample(
     }
     let ax = Axis::new(sw, dw, width, level);
     let ay = Axis::new(sh, dh, height, level);
-    match channels {
-        1 => by_axes::<1>(pixels, sw, &ax, &ay),
-        2 => by_axes::<2>(pixels, sw, &ax, &ay),
-        3 => by_axes::<3>(pixels, sw, &ax, &ay),
-        _ => by_axes::<4>(pixels, sw, &ax, &ay),
+    // A source row's sums under an output column's taps fit 32 bits at any size a decode
+    // draws (their weights sum to twice the image side at most); the 64-bit path is for the
+    // rest.
+    let weights = |a: &Axis| {
+        a.taps
+            .iter()
+            .map(|t| t.iter().map(|t| t.1).sum::<u64>())
+            .max()
+    };
+    let narrow = weights(&ax).unwrap_or(0) * 255 <= u32::MAX as u64
+        && weights(&ay).unwrap_or(0) <= u32::MAX as u64;
+    match (channels, narrow) {
+        (1, true) => by_axes::<1, u32>(pixels, sw, &ax, &ay),
+        (2, true) => by_axes::<2, u32>(pixels, sw, &ax, &ay),
+        (3, true) => by_axes::<3, u32>(pixels, sw, &ax, &ay),
+        (_, true) => by_axes::<4, u32>(pixels, sw, &ax, &ay),
+        (1, false) => by_axes::<1, u64>(pixels, sw, &ax, &ay),
+        (2, false) => by_axes::<2, u64>(pixels, sw, &ax, &ay),
+        (3, false) => by_axes::<3, u64>(pixels, sw, &ax, &ay),
+        (_, false) => by_axes::<4, u64>(pixels, sw, &ax, &ay),
     }
 }
 
-/// [`resample`] of `C`-channel pixels (`sw` wide) along the two axes' taps.
-fn by_axes<const C: usize>(pixels: &[u8], sw: usize, ax: &Axis, ay: &Axis) -> Vec<u8> {
+/// A source row's sum under an output column's taps, as [`by_axes`] keeps it.
+trait RowSum: Copy + Default {
+    fn of(v: u64) -> Self;
+    /// `w · self`, for a weight `w` that fits the type too.
+    fn times(self, w: u64) -> u64;
+}
+
+impl RowSum for u32 {
+    #[inline(always)]
+    fn of(v: u64) -> u32 {
+        v as u32
+    }
+    #[inline(always)]
+    fn times(self, w: u64) -> u64 {
+        // Both factors 32-bit: one widening multiply, which vectorises.
+        (w as u32 as u64) * self as u64
+    }
+}
+
+impl RowSum for u64 {
+    #[inline(always)]
+    fn of(v: u64) -> u64 {
+        v
+    }
+    #[inline(always)]
+    fn times(self, w: u64) -> u64 {
+        w * self
+    }
+}
+
+/// [`resample`] of `C`-channel pixels (`sw` wide) along the two axes' taps, a source row's
+/// sums kept as `S`.
+fn by_axes<const C: usize, S: RowSum>(pixels: &[u8], sw: usize, ax: &Axis, ay: &Axis) -> Vec<u8> {
     let (c, dw, dh) = (C, ax.taps.len(), ay.taps.len());
     let mut out = vec![0u8; dw * dh * c];
     // One axis at a time, exactly: a source row's sums under each output column's taps
-    // (64-bit, unrounded), then those rows' sums under the output row's taps, rounded once:
-    // the same sums as the products of the two taps, at a fraction of the work. Output rows
-    // take source rows in increasing order, neighbours sharing some: each row's sums are
-    // made once, into a ring that holds an output row's worth of them and the next one's.
+    // (unrounded), then those rows' sums under the output row's taps, rounded once: the same
+    // sums as the products of the two taps, at a fraction of the work. Output rows take
+    // source rows in increasing order, neighbours sharing some: each row's sums are made
+    // once, into a ring that holds an output row's worth of them and the next one's.
     let ring = ay.taps.iter().map(Vec::len).max().unwrap_or(0) + 1;
-    let mut sums = vec![0u64; ring * dw * c];
+    let mut sums = vec![S::default(); ring * dw * c];
     let mut held = vec![usize::MAX; ring];
     let mut acc = vec![0u64; dw * c];
     let x_total: Vec<u64> = ax
@@ -183,26 +254,32 @@ fn by_axes<const C: usize>(pixels: &[u8], sw: usize, ax: &Axis, ay: &Axis) -> Ve
         .iter()
         .map(|t| t.iter().map(|t| t.1).sum())
         .collect();
+    let (starts, span, x_weights) = ax.windows(sw);
     for (ty, out) in ay.taps.iter().zip(out.chunks_exact_mut(dw * c)) {
-        acc.fill(0);
-        for &(y, wy) in ty {
+        for (i, &(y, wy)) in ty.iter().enumerate() {
             let row = &mut sums[(y % ring) * dw * c..][..dw * c];
             if held[y % ring] != y {
                 held[y % ring] = y;
                 let src = &pixels[y * sw * c..(y + 1) * sw * c];
-                for (tx, sums) in ax.taps.iter().zip(row.chunks_exact_mut(C)) {
-                    let mut s = [0u64; C];
-                    for &(x, wx) in tx {
-                        let px: &[u8; C] = src[x * C..][..C].try_into().expect("C channels");
-                        for (a, &v) in s.iter_mut().zip(px) {
-                            *a += wx * v as u64;
-                        }
-                    }
-                    sums.copy_from_slice(&s);
+                // Windows of a known length unroll (a smaller output has 2 to 5 taps a
+                // pixel up to a fourth of the size, a larger one 2).
+                match span {
+                    1 => row_sums::<C, 1, S>(src, &starts, &x_weights, row),
+                    2 => row_sums::<C, 2, S>(src, &starts, &x_weights, row),
+                    3 => row_sums::<C, 3, S>(src, &starts, &x_weights, row),
+                    4 => row_sums::<C, 4, S>(src, &starts, &x_weights, row),
+                    5 => row_sums::<C, 5, S>(src, &starts, &x_weights, row),
+                    _ => row_sums_of(src, C, span, &starts, &x_weights, row),
                 }
             }
-            for (a, &r) in acc.iter_mut().zip(&*row) {
-                *a += wy * r;
+            // The first row's products are written, the others added.
+            let row = &*row;
+            if i == 0 {
+                acc.iter_mut().zip(row).for_each(|(a, &r)| *a = r.times(wy));
+            } else {
+                acc.iter_mut()
+                    .zip(row)
+                    .for_each(|(a, &r)| *a += r.times(wy));
             }
         }
         let y_total: u64 = ty.iter().map(|t| t.1).sum();
@@ -214,6 +291,55 @@ fn by_axes<const C: usize>(pixels: &[u8], sw: usize, ax: &Axis, ay: &Axis) -> Ve
         }
     }
     out
+}
+
+/// A source row's sums under each output pixel's window of `K` weights (`starts` and
+/// `weights` from [`Axis::windows`]), into `row`.
+fn row_sums<const C: usize, const K: usize, S: RowSum>(
+    src: &[u8],
+    starts: &[usize],
+    weights: &[u64],
+    row: &mut [S],
+) {
+    for ((&x, w), sums) in starts
+        .iter()
+        .zip(weights.chunks_exact(K))
+        .zip(row.chunks_exact_mut(C))
+    {
+        let px = &src[x * C..][..K * C];
+        let w: &[u64; K] = w.try_into().expect("K weights");
+        let mut s = [0u64; C];
+        for (t, px) in px.chunks_exact(C).enumerate() {
+            let px: &[u8; C] = px.try_into().expect("C channels");
+            for (a, &v) in s.iter_mut().zip(px) {
+                *a += w[t] * v as u64;
+            }
+        }
+        for (o, s) in sums.iter_mut().zip(s) {
+            *o = S::of(s);
+        }
+    }
+}
+
+/// [`row_sums`] for a window of any length `k`, `c` channels.
+fn row_sums_of<S: RowSum>(
+    src: &[u8],
+    c: usize,
+    k: usize,
+    starts: &[usize],
+    weights: &[u64],
+    row: &mut [S],
+) {
+    for ((&x, w), sums) in starts
+        .iter()
+        .zip(weights.chunks_exact(k))
+        .zip(row.chunks_exact_mut(c))
+    {
+        let px = &src[x * c..][..k * c];
+        for (ch, o) in sums.iter_mut().enumerate() {
+            *o = S::of((0..k).map(|t| w[t] * px[t * c + ch] as u64).sum());
+        }
+    }
 }
 
 #[cfg(test)]
@@ -251,6 +377,10 @@ mod tests {
             (100, 60, 3, 0, 7, 90),
             (33, 20, 2, 1, 33, 20),
             (1, 1, 3, 0, 9, 4),
+            // Windows of 5 and of 1 sample, and weights past 32-bit sums (the 64-bit path).
+            (10, 4, 3, 0, 2, 1),
+            (4, 3, 3, 1, 4, 3),
+            (3, 2, 1, 14, 600, 3),
         ] {
             let px: Vec<u8> = (0..sw * sh * c).map(|_| next() as u8).collect();
             let full = (sw << level, sh << level);
