@@ -205,8 +205,11 @@ pub(crate) fn resample(
     }
 }
 
-/// A source row's sum under an output column's taps, as [`by_axes`] keeps it.
-trait RowSum: Copy + Default {
+/// A source row's sum under an output column's taps, as [`by_axes`] keeps it (and makes it:
+/// its weights and products are of the same width).
+trait RowSum:
+    Copy + Default + From<u8> + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self>
+{
     fn of(v: u64) -> Self;
     /// `w · self`, for a weight `w` that fits the type too.
     fn times(self, w: u64) -> u64;
@@ -255,6 +258,8 @@ fn by_axes<const C: usize, S: RowSum>(pixels: &[u8], sw: usize, ax: &Axis, ay: &
         .map(|t| t.iter().map(|t| t.1).sum())
         .collect();
     let (starts, span, x_weights) = ax.windows(sw);
+    let x_weights: Vec<S> = x_weights.into_iter().map(S::of).collect();
+    let mut by = Divisor::new(1);
     for (ty, out) in ay.taps.iter().zip(out.chunks_exact_mut(dw * c)) {
         for (i, &(y, wy)) in ty.iter().enumerate() {
             let row = &mut sums[(y % ring) * dw * c..][..dw * c];
@@ -285,12 +290,44 @@ fn by_axes<const C: usize, S: RowSum>(pixels: &[u8], sw: usize, ax: &Axis, ay: &
         let y_total: u64 = ty.iter().map(|t| t.1).sum();
         for ((o, a), &xt) in (out.chunks_exact_mut(c).zip(acc.chunks_exact(c))).zip(&x_total) {
             let total = y_total * xt;
+            // Every pixel's taps weigh the same at level 0 (its footprint, or the distance
+            // between two samples): the divisor is made once.
+            if 2 * total != by.d {
+                by = Divisor::new(2 * total);
+            }
             for (o, &a) in o.iter_mut().zip(a) {
-                *o = ((2 * a + total) / (2 * total)) as u8;
+                *o = by.quotient(2 * a + total) as u8;
             }
         }
     }
     out
+}
+
+/// Division by `d` as a multiplication by its reciprocal and a correction: exact, and a
+/// few times faster than a 64-bit division.
+struct Divisor {
+    d: u64,
+    /// ⌊(2^64 − 1) / d⌋.
+    m: u64,
+}
+
+impl Divisor {
+    fn new(d: u64) -> Divisor {
+        Divisor { d, m: u64::MAX / d }
+    }
+
+    /// ⌊n / d⌋.
+    #[inline(always)]
+    fn quotient(&self, n: u64) -> u64 {
+        // q is at most 2 below the quotient: m·d > 2^64 − 1 − d, so n·m/2^64 > n/d − 2.
+        let mut q = ((n as u128 * self.m as u128) >> 64) as u64;
+        let mut r = n - q * self.d;
+        while r >= self.d {
+            q += 1;
+            r -= self.d;
+        }
+        q
+    }
 }
 
 /// A source row's sums under each output pixel's window of `K` weights (`starts` and
@@ -298,26 +335,21 @@ fn by_axes<const C: usize, S: RowSum>(pixels: &[u8], sw: usize, ax: &Axis, ay: &
 fn row_sums<const C: usize, const K: usize, S: RowSum>(
     src: &[u8],
     starts: &[usize],
-    weights: &[u64],
+    weights: &[S],
     row: &mut [S],
 ) {
-    for ((&x, w), sums) in starts
-        .iter()
-        .zip(weights.chunks_exact(K))
-        .zip(row.chunks_exact_mut(C))
-    {
+    let windows = starts.iter().zip(weights.chunks_exact(K));
+    for ((&x, w), sums) in windows.zip(row.chunks_exact_mut(C)) {
         let px = &src[x * C..][..K * C];
-        let w: &[u64; K] = w.try_into().expect("K weights");
-        let mut s = [0u64; C];
+        let w: &[S; K] = w.try_into().expect("K weights");
+        let mut s = [S::default(); C];
         for (t, px) in px.chunks_exact(C).enumerate() {
             let px: &[u8; C] = px.try_into().expect("C channels");
             for (a, &v) in s.iter_mut().zip(px) {
-                *a += w[t] * v as u64;
+                *a = *a + w[t] * S::from(v);
             }
         }
-        for (o, s) in sums.iter_mut().zip(s) {
-            *o = S::of(s);
-        }
+        sums.copy_from_slice(&s);
     }
 }
 
@@ -327,17 +359,14 @@ fn row_sums_of<S: RowSum>(
     c: usize,
     k: usize,
     starts: &[usize],
-    weights: &[u64],
+    weights: &[S],
     row: &mut [S],
 ) {
-    for ((&x, w), sums) in starts
-        .iter()
-        .zip(weights.chunks_exact(k))
-        .zip(row.chunks_exact_mut(c))
-    {
+    let windows = starts.iter().zip(weights.chunks_exact(k));
+    for ((&x, w), sums) in windows.zip(row.chunks_exact_mut(c)) {
         let px = &src[x * c..][..k * c];
         for (ch, o) in sums.iter_mut().enumerate() {
-            *o = S::of((0..k).map(|t| w[t] * px[t * c + ch] as u64).sum());
+            *o = (0..k).fold(S::default(), |a, t| a + w[t] * S::from(px[t * c + ch]));
         }
     }
 }
@@ -395,6 +424,27 @@ mod tests {
                 ),
                 "{sw}x{sh}x{c} level {level} to {dw}x{dh}"
             );
+        }
+    }
+
+    #[test]
+    fn divisor_quotients_are_exact() {
+        let mut next = crate::testing::xorshift(9);
+        for d in (1..300).chain([1 << 32, u64::MAX / 3, u64::MAX]) {
+            let by = Divisor::new(d);
+            for n in [
+                0,
+                1,
+                d - 1,
+                d,
+                d.saturating_add(1),
+                u64::MAX,
+                u64::MAX - 1,
+                next(),
+                next() >> 20,
+            ] {
+                assert_eq!(by.quotient(n), n / d, "{n} / {d}");
+            }
         }
     }
 
