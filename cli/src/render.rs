@@ -69,6 +69,34 @@ impl Samples {
         }
     }
 
+    /// The samples and their mirror images across the image's edges, each image with its
+    /// sample's colour: the cells a decode draws at the edges, so that a cell-based style runs
+    /// off the edges as a mosaic cut by its frame, rather than stopping at the samples' hull
+    /// (beyond which each pixel would take its nearest sample's colour: a band of stripes).
+    fn with_mirror_images(&self) -> Samples {
+        let (w, h) = self.source;
+        let exact = self.exact.as_ref().map(|(l, f)| (l.as_slice(), *f));
+        let images = qcs::reconstruction::mirror_images(&self.pos, exact, w, h);
+        let mut all = Samples {
+            pos: self.pos.clone(),
+            col: self.col.clone(),
+            source: self.source,
+            exact: self.exact.clone(),
+        };
+        for (k, p, z) in images {
+            // An image beyond the lattice's exact range has no lattice point: left out, as a
+            // decode leaves it.
+            match (&mut all.exact, z) {
+                (Some((lattice, _)), Some(z)) => lattice.push(z),
+                (Some(_), None) => continue,
+                (None, _) => {}
+            }
+            all.pos.push(p);
+            all.col.extend_from_within(3 * k..3 * k + 3);
+        }
+        all
+    }
+
     /// The Gouraud picture of the samples at `size`, as the decoder draws it.
     fn gouraud(&self, size: (u32, u32)) -> image::RgbImage {
         let (w, h) = self.source;
@@ -241,11 +269,17 @@ pub fn render(a: RenderArgs, ctx: &Ctx) -> Result<()> {
         .check_output(size.0 as u64, size.1 as u64)
         .map_err(qcs::Error::from)?;
     let sites = samples.sites();
+    // The cell-based styles draw the cells at the edges too.
+    let mirrored = matches!(a.style, Style::Mosaic | Style::Strokes | Style::Delaunay)
+        .then(|| samples.with_mirror_images());
+    let (cells, cell_col) = mirrored
+        .as_ref()
+        .map_or((sites, col), |m| (m.sites(), &m.col));
     let img = match a.style {
-        Style::Mosaic => styles::mosaic(sites, col, source, size)?,
-        Style::Strokes => styles::strokes(sites, col, source, size)?,
+        Style::Mosaic => styles::mosaic(cells, cell_col, source, size)?,
+        Style::Strokes => styles::strokes(cells, cell_col, source, size)?,
         Style::Voronoi => styles::voronoi(sites, col, source, size)?,
-        Style::Delaunay => styles::delaunay_over(sites, source, &samples.gouraud(size))?,
+        Style::Delaunay => styles::delaunay_over(cells, source, &samples.gouraud(size))?,
         Style::Sites => styles::order(pos, source, size)?,
         Style::Spectrum => {
             let n = size.0.max(size.1).clamp(16, 2048) as usize;

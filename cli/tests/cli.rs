@@ -1645,3 +1645,32 @@ fn an_animation_is_said_to_be_stored_as_its_first_frame() {
     assert_eq!(c, Some(0), "{err}");
     assert!(!err.contains("animation"), "{err}");
 }
+
+/// A mosaic runs off the image's edges, its tiles cut by the frame (the samples are
+/// triangulated with their mirror images, as a decode does): along every edge, grout between
+/// tiles, where a fill beyond the samples' hull drew a band of stripes without any.
+#[test]
+fn a_mosaic_runs_off_every_edge() {
+    let file = rocket_qcs("mosaic.qcs");
+    let png = scratch("mosaic.png");
+    let out = run(qcs().args(["-q", "render"]).arg(&file).arg(&png));
+    assert!(out.status.success(), "{out:?}");
+    let img = image::open(&png).expect("the PNG").to_rgb8();
+    let (w, h) = img.dimensions();
+    let grout = |xs: std::ops::Range<u32>, ys: std::ops::Range<u32>| {
+        let n = xs.len() * ys.len();
+        let ink = ys
+            .flat_map(|y| xs.clone().map(move |x| (x, y)))
+            .filter(|&(x, y)| img.get_pixel(x, y).0 == qcs_lab::styles::INK)
+            .count();
+        ink as f64 / n as f64
+    };
+    for (edge, share) in [
+        ("top", grout(0..w, 0..4)),
+        ("bottom", grout(0..w, h - 4..h)),
+        ("left", grout(0..4, 0..h)),
+        ("right", grout(w - 4..w, 0..h)),
+    ] {
+        assert!((0.25..0.75).contains(&share), "{edge}: {share:.3} of grout");
+    }
+}

@@ -73,6 +73,37 @@ pub use raster::{rasterise, RasterTriangle, RasterVertex};
 pub use shepard::SampleGrid;
 
 use hull::Boundary;
+
+/// The mirror images of a set of `positions` in a `width × height` source, as a decode
+/// triangulates them (the module's *Mirror points*) once all of them have arrived, for a
+/// drawing that should run off the edges rather than stop at the samples' hull (the stylized
+/// renderings): each as the index of the sample it reflects, its position and, with
+/// `exact`'s lattice points and frame, its own lattice point.
+///
+/// ```
+/// use qcs::sites::Quasicrystal;
+/// let sites = Quasicrystal::new(96, 64)?.first(500);
+/// let pos: Vec<_> = sites.iter().map(|s| s.pos).collect();
+/// let images = qcs::reconstruction::mirror_images(&pos, None, 96, 64);
+/// // Reflected across the left edge: the same height, the other side of x = 0.
+/// assert!(images.iter().any(|&(k, p, _)| p[0] < 0.0 && p[0] == -pos[k][0] && p[1] == pos[k][1]));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn mirror_images(
+    positions: &[Point],
+    exact: Option<(&[ZZeta], LatticeFrame)>,
+    width: u32,
+    height: u32,
+) -> Vec<(usize, Point, Option<ZZeta>)> {
+    let last = positions.len().saturating_sub(1);
+    let lines = exact.map(|(_, frame)| Lines::new(frame, width, height));
+    let mut out = Vec::new();
+    for (k, &p) in positions.iter().enumerate() {
+        let x = lines.as_ref().zip(exact).map(|(l, (lattice, _))| (l, lattice[k]));
+        mirror_points(last, p, width, height, x, |q, z| out.push((k, q, z)));
+    }
+    out
+}
 use mirror::{mirror_points, Lines};
 use raster::Band;
 
