@@ -518,6 +518,11 @@ impl StreamDecoder {
 
     /// Renders the picture from every sample received so far, at `width × height`.
     ///
+    /// It is the picture the spec fixes at the image's size, drawn whole and then averaged to
+    /// the output: for a preview much smaller than the image (a 1000 × 750 view of a
+    /// 12-megapixel photo), [`StreamDecoder::render_thumbnail`] reads only the coarse bands
+    /// and costs about half as much.
+    ///
     /// Before the header is complete this is [`Error::NeedMoreData`].
     pub fn render(&mut self, method: Method, width: u32, height: u32) -> Result<Picture> {
         self.render_first(u64::MAX, method, width, height)
