@@ -269,7 +269,7 @@ fn by_axes<const C: usize, S: RowSum>(pixels: &[u8], sw: usize, ax: &Axis, ay: &
                 // Windows of a known length unroll (a smaller output has 2 to 5 taps a
                 // pixel up to a fourth of the size, a larger one 2).
                 match span {
-                    1 => row_sums::<C, 1, S>(src, &starts, &x_weights, row),
+                    0 | 1 => row_sums::<C, 1, S>(src, &starts, &x_weights, row),
                     2 => row_sums::<C, 2, S>(src, &starts, &x_weights, row),
                     3 => row_sums::<C, 3, S>(src, &starts, &x_weights, row),
                     4 => row_sums::<C, 4, S>(src, &starts, &x_weights, row),
