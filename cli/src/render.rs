@@ -69,32 +69,18 @@ impl Samples {
         }
     }
 
-    /// The samples and their mirror images across the image's edges, each image with its
-    /// sample's colour: the cells a decode draws at the edges, so that a cell-based style runs
-    /// off the edges as a mosaic cut by its frame, rather than stopping at the samples' hull
-    /// (beyond which each pixel would take its nearest sample's colour: a band of stripes).
+    /// The samples and their mirror images across the image's edges
+    /// ([`styles::with_mirror_images`]): the cells a decode draws at the edges.
     fn with_mirror_images(&self) -> Samples {
-        let (w, h) = self.source;
         let exact = self.exact.as_ref().map(|(l, f)| (l.as_slice(), *f));
-        let images = qcs::reconstruction::mirror_images(&self.pos, exact, w, h);
-        let mut all = Samples {
-            pos: self.pos.clone(),
-            col: self.col.clone(),
+        let (pos, lattice, col) =
+            styles::with_mirror_images(&self.pos, exact, &self.col, self.source);
+        Samples {
+            pos,
+            col,
             source: self.source,
-            exact: self.exact.clone(),
-        };
-        for (k, p, z) in images {
-            // An image beyond the lattice's exact range has no lattice point: left out, as a
-            // decode leaves it.
-            match (&mut all.exact, z) {
-                (Some((lattice, _)), Some(z)) => lattice.push(z),
-                (Some(_), None) => continue,
-                (None, _) => {}
-            }
-            all.pos.push(p);
-            all.col.extend_from_within(3 * k..3 * k + 3);
+            exact: lattice.zip(self.exact.as_ref().map(|e| e.1)),
         }
-        all
     }
 
     /// The Gouraud picture of the samples at `size`, as the decoder draws it.

@@ -291,11 +291,14 @@ pub fn run(
         let sites = s.sites(w, h, options.panel_count);
         let colours = sample_colours(first, &sites);
         let name = s.name();
+        // The mosaic runs off the frame, as `qcs render` draws it.
+        let (cells, _, cell_colours) =
+            crate::styles::with_mirror_images(&sites, None, &colours, (w, h));
         let panels = [
             ("sites", crate::styles::order(&sites, (w, h), out)?),
             (
                 "mosaic",
-                crate::styles::mosaic(&sites, &colours, (w, h), out)?,
+                crate::styles::mosaic(&cells, &cell_colours, (w, h), out)?,
             ),
             (
                 "voronoi",

@@ -106,6 +106,44 @@ impl<'a, const N: usize> From<&'a [Point; N]> for Sites<'a> {
 /// Colour of grout, edges and lines.
 pub const INK: [u8; 3] = [24, 24, 24];
 
+/// Sites with their mirror images across the edges of the `source` frame, as a decode
+/// triangulates them ([`qcs::reconstruction::mirror_images`]), each image with its site's
+/// colour (3 bytes a site): what the cell-based styles (mosaic, strokes, the Delaunay
+/// wireframe) draw so that their cells run off the frame, rather than stopping at the sites'
+/// convex hull, beyond which each pixel takes its nearest site's colour (a band of stripes
+/// along the edges). With `exact`'s lattice points and frame, the images have theirs (an image
+/// beyond the lattice's exact range is left out, as a decode leaves it).
+///
+/// ```
+/// use qcs_lab::styles::with_mirror_images;
+/// let sites = [[1.0, 1.0], [9.0, 1.0], [1.0, 9.0], [9.0, 9.0]];
+/// let colours = [255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255];
+/// let (pos, lattice, col) = with_mirror_images(&sites, None, &colours, (10, 10));
+/// assert!(pos.len() > 4 && lattice.is_none() && col.len() == 3 * pos.len());
+/// assert!(pos.contains(&[-1.0, 1.0]) && pos.contains(&[-1.0, -1.0]));
+/// ```
+pub fn with_mirror_images(
+    positions: &[Point],
+    exact: Option<(&[ZZeta], qcs::sites::Frame)>,
+    colours: &[u8],
+    source: (u32, u32),
+) -> (Vec<Point>, Option<Vec<ZZeta>>, Vec<u8>) {
+    let images = qcs::reconstruction::mirror_images(positions, exact, source.0, source.1);
+    let mut pos = positions.to_vec();
+    let mut lattice = exact.map(|(l, _)| l.to_vec());
+    let mut col = colours.to_vec();
+    for (k, p, z) in images {
+        match (&mut lattice, z) {
+            (Some(lattice), Some(z)) => lattice.push(z),
+            (Some(_), None) => continue,
+            (None, _) => {}
+        }
+        pos.push(p);
+        col.extend_from_slice(&colours[3 * k..3 * k + 3]);
+    }
+    (pos, lattice, col)
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Site {
     pos: Point2<f64>,
