@@ -450,3 +450,39 @@ fn image_knows_qcs_files_by_content() {
         );
     }
 }
+
+/// A lossy file keeps what is wholly opaque or transparent so: the encoder aims its alpha past
+/// 0 and 255 there, and the decoder's clamp lands on them (without it, a fifth of an opaque
+/// photograph's pixels decoded to 254). Pixels near a soft edge may move; those away from it
+/// may not.
+#[test]
+fn lossy_alpha_stays_opaque_and_transparent() {
+    let rgb = image::open(format!("{}/assets/rocket.png", env!("CARGO_MANIFEST_DIR")))
+        .unwrap()
+        .to_rgb8();
+    // Transparent on the left, a ramp over 32 columns, opaque on the right; the whole of it
+    // opaque.
+    let alpha = |x: u32| (x.saturating_sub(200) * 8).min(255) as u8;
+    for ramp in [true, false] {
+        let img = image::RgbaImage::from_fn(rgb.width(), rgb.height(), |x, y| {
+            let [r, g, b] = rgb.get_pixel(x, y).0;
+            image::Rgba([r, g, b, if ramp { alpha(x) } else { 255 }])
+        });
+        let bytes = encode(
+            &image::DynamicImage::ImageRgba8(img.clone()),
+            &EncodeOptions::default(),
+        )
+        .unwrap();
+        let d = decode(&bytes, &DecodeOptions::default())
+            .unwrap()
+            .image
+            .to_rgba8();
+        for (x, y, p) in d.enumerate_pixels() {
+            let want = img.get_pixel(x, y).0[3];
+            let far = !(196..240).contains(&x);
+            if want % 255 == 0 && far {
+                assert_eq!(p.0[3], want, "ramp {ramp}: alpha at ({x}, {y})");
+            }
+        }
+    }
+}
