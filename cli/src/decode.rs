@@ -242,6 +242,12 @@ pub fn decode(a: DecodeArgs, ctx: &Ctx) -> Result<()> {
             out.display()
         ));
     }
+    if dropped.alpha {
+        super::warn(format!(
+            "{} cannot hold the picture's transparency: its transparent parts show the colours              under them; write PNG, WebP or TIFF to keep it",
+            out.display()
+        ));
+    }
     if dropped.exif {
         eprintln_unless(
             ctx.quiet,

@@ -649,6 +649,8 @@ impl<'a> Meta<'a> {
 pub struct Dropped {
     pub icc: bool,
     pub exif: bool,
+    /// Transparency (an alpha channel not wholly opaque): JPEG, PPM and PGM hold none.
+    pub alpha: bool,
 }
 
 /// [`save_image`] with `meta` embedded where the format can hold it. Returns what it could
@@ -738,13 +740,20 @@ fn encode_into<W: std::io::Write + std::io::Seek>(
             .exif
             .is_some_and(|e| enc.set_exif_metadata(e.to_vec()).is_err());
         img.write_with_encoder(enc)?;
-        Ok(Dropped { icc, exif })
+        Ok(Dropped {
+            icc,
+            exif,
+            alpha: false,
+        })
     }
     let none = Dropped {
         icc: meta.icc.is_some(),
         exif: meta.exif.is_some(),
+        alpha: false,
     };
-    match format {
+    let opaque_only = format == ImageFormat::Jpeg || ["ppm", "pgm"].contains(&ext);
+    let alpha = opaque_only && translucent(img);
+    let dropped = match format {
         ImageFormat::Png => with(img, png::PngEncoder::new(sink), meta),
         ImageFormat::Jpeg => with(
             img,
@@ -755,6 +764,17 @@ fn encode_into<W: std::io::Write + std::io::Seek>(
         ImageFormat::WebP => with(img, webp::WebPEncoder::new_lossless(sink), meta),
         ImageFormat::Pnm => write_netpbm(img, ext, sink).map(|()| none),
         _ => img.write_to(sink, format).map(|()| none),
+    };
+    dropped.map(|d| Dropped { alpha, ..d })
+}
+
+/// Whether `img` has an alpha channel with a value below opaque.
+fn translucent(img: &image::DynamicImage) -> bool {
+    use image::DynamicImage as D;
+    match img {
+        D::ImageLumaA8(i) => i.pixels().any(|p| p.0[1] < u8::MAX),
+        D::ImageRgba8(i) => i.pixels().any(|p| p.0[3] < u8::MAX),
+        other => other.color().has_alpha() && other.to_rgba8().pixels().any(|p| p.0[3] < u8::MAX),
     }
 }
 

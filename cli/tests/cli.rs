@@ -1674,3 +1674,35 @@ fn a_mosaic_runs_off_every_edge() {
         assert!((0.25..0.75).contains(&share), "{edge}: {share:.3} of grout");
     }
 }
+
+/// A picture with transparency written where it cannot be held (JPEG, PPM) is said to lose
+/// it; PNG keeps it, and an opaque picture loses nothing to say.
+#[test]
+fn lost_transparency_is_said() {
+    let rgb = image::open(ROCKET).expect("rocket").to_rgb8();
+    let with_alpha = |a: u8| {
+        let img = image::RgbaImage::from_fn(rgb.width(), rgb.height(), |x, y| {
+            let [r, g, b] = rgb.get_pixel(x, y).0;
+            image::Rgba([r, g, b, if x < 100 { a } else { 255 }])
+        });
+        let png = scratch(&format!("alpha-{a}.png"));
+        img.save(&png).expect("an RGBA PNG");
+        let file = scratch(&format!("alpha-{a}.qcs"));
+        assert!(run(qcs().args(["-q", "encode"]).arg(&png).arg(&file))
+            .status
+            .success());
+        file
+    };
+    let says = "cannot hold the picture's transparency";
+    let (clear, opaque) = (with_alpha(0), with_alpha(255));
+    for (file, out, warned) in [
+        (&clear, "alpha-0.jpg", true),
+        (&clear, "alpha-0.ppm", true),
+        (&clear, "alpha-0-out.png", false),
+        (&opaque, "alpha-255.jpg", false),
+    ] {
+        let (c, err) = code(qcs().args(["-q", "decode"]).arg(file).arg(scratch(out)));
+        assert_eq!(c, Some(0), "{out}: {err}");
+        assert_eq!(err.contains(says), warned, "{out}: {err}");
+    }
+}
