@@ -244,7 +244,8 @@ pub fn decode(a: DecodeArgs, ctx: &Ctx) -> Result<()> {
     }
     if dropped.alpha {
         super::warn(format!(
-            "{} cannot hold the picture's transparency: its transparent parts show the colours              under them; write PNG, WebP or TIFF to keep it",
+            "{} cannot hold the picture's transparency: its transparent parts show the colours \
+             under them; write PNG, WebP or TIFF to keep it",
             out.display()
         ));
     }

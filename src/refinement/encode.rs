@@ -131,6 +131,7 @@ pub(crate) fn transform(
 ) -> Transformed {
     let (w, h) = (width as usize, height as usize);
     let mut planes = to_planes(pixels, channels, frac);
+    // Grey + alpha and RGBA (the even channel counts) have alpha last.
     if frac > 0 && channels % 2 == 0 {
         overshoot_alpha(&mut planes[channels - 1], frac);
     }
@@ -147,9 +148,10 @@ pub(crate) fn transform(
 }
 
 /// Levels beyond 0..=255 that a lossy file's alpha aims at where the image is wholly
-/// transparent or opaque. On a dev photograph with a soft-edged mask at quality 85 (MEASUREMENTS.md,
-/// *Alpha that stays opaque*): 22% of its opaque pixels decoded below 255 without it, none with
-/// 8, the file 0.02% smaller; a hard-edged mask keeps 0.6% of them (next to its edges).
+/// transparent or opaque. On a dev photograph with a soft-edged mask at quality 85
+/// (MEASUREMENTS.md, *Alpha that stays opaque*): 22% of its opaque pixels decoded below 255
+/// without it, none with 8, the file 0.02% smaller; with a hard-edged mask 0.6% of them
+/// still do (next to its edges).
 const ALPHA_MARGIN: i32 = 8;
 
 /// Moves a lossy file's alpha plane (centred, `frac` fraction bits) past 0 and 255 by
