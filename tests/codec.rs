@@ -453,8 +453,8 @@ fn image_knows_qcs_files_by_content() {
 
 /// A lossy file keeps what is wholly opaque or transparent so: the encoder aims its alpha past
 /// 0 and 255 there, and the decoder's clamp lands on them (without it, a fifth of an opaque
-/// photograph's pixels decoded to 254). Pixels near a soft edge may move; those away from it
-/// may not.
+/// photograph's pixels decoded to 254, and every one of a file of levels only). Pixels near
+/// a soft edge may move; those away from it may not.
 #[test]
 fn lossy_alpha_stays_opaque_and_transparent() {
     let rgb = image::open(format!("{}/assets/rocket.png", env!("CARGO_MANIFEST_DIR")))
@@ -463,16 +463,17 @@ fn lossy_alpha_stays_opaque_and_transparent() {
     // Transparent on the left, a ramp over 32 columns, opaque on the right; the whole of it
     // opaque.
     let alpha = |x: u32| (x.saturating_sub(200) * 8).min(255) as u8;
-    for ramp in [true, false] {
+    // Levels only too, opaque: their samples' colours reach 255 by overshooting it.
+    for (ramp, opts) in [
+        (true, EncodeOptions::default()),
+        (false, EncodeOptions::default()),
+        (false, levels_only()),
+    ] {
         let img = image::RgbaImage::from_fn(rgb.width(), rgb.height(), |x, y| {
             let [r, g, b] = rgb.get_pixel(x, y).0;
             image::Rgba([r, g, b, if ramp { alpha(x) } else { 255 }])
         });
-        let bytes = encode(
-            &image::DynamicImage::ImageRgba8(img.clone()),
-            &EncodeOptions::default(),
-        )
-        .unwrap();
+        let bytes = encode(&image::DynamicImage::ImageRgba8(img.clone()), &opts).unwrap();
         let d = decode(&bytes, &DecodeOptions::default())
             .unwrap()
             .image

@@ -587,11 +587,20 @@ impl State {
             let base = ch * per_channel + (act * LUMA_CLASSES + lc) * PER_CTX;
             let mant = ch * per_channel + ACT * LUMA_CLASSES * PER_CTX + act * MANT_PER_ACT;
             let r = target[ch] - pred;
-            let q = if r >= 0 {
+            let mut q = if r >= 0 {
                 (r + step / 2) / step
             } else {
                 -((-r + step / 2) / step)
             };
+            // A target at an end of the range (opaque, transparent, white, black) is reached
+            // by overshooting it, which the clamp below makes exact: the nearest step short
+            // of it would leave an opaque picture 254 everywhere (each sample predicts the
+            // next, so the shortfall never closes).
+            if target[ch] == hi && pred + q * step < hi {
+                q += 1;
+            } else if target[ch] == lo && pred + q * step > lo {
+                q -= 1;
+            }
             let q = code_residual(io, &mut self.model, base, mant, q)?;
             let v = (pred as i64 + q as i64 * step as i64).clamp(lo as i64, hi as i64) as i32;
             recon[ch] = v;
