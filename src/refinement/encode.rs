@@ -132,7 +132,7 @@ pub(crate) fn transform(
     let (w, h) = (width as usize, height as usize);
     let mut planes = to_planes(pixels, channels, frac);
     // Grey + alpha and RGBA (the even channel counts) have alpha last.
-    if frac > 0 && channels % 2 == 0 {
+    if frac > 0 && channels.is_multiple_of(2) {
         overshoot_alpha(&mut planes[channels - 1], frac);
     }
     (planes.par_iter_mut()).for_each(|plane| forward(kernel, plane, w, h, levels));
