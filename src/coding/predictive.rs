@@ -439,12 +439,15 @@ impl Model {
 
 /// Where a channel's bits go: encoder or decoder.
 trait BitIo {
+    /// Whether this is the encoder (which picks what the decoder reads).
+    const ENCODES: bool;
     /// Codes (encoder) or decodes (decoder) one bit with probability `model.probs[i]`.
     fn bit(&mut self, model: &mut Model, i: usize, bit: bool) -> Option<bool>;
 }
 
 struct Enc<'a>(&'a mut RangeEncoder);
 impl BitIo for Enc<'_> {
+    const ENCODES: bool = true;
     fn bit(&mut self, model: &mut Model, i: usize, bit: bool) -> Option<bool> {
         self.0.encode(&mut model.probs[i], bit);
         Some(bit)
@@ -457,11 +460,33 @@ struct Dec<'a> {
     len: usize,
 }
 impl BitIo for Dec<'_> {
+    const ENCODES: bool = false;
     fn bit(&mut self, model: &mut Model, i: usize, _bit: bool) -> Option<bool> {
         if model.logging {
             model.log.push((i as u32, model.probs[i]));
         }
         self.rc.decode(&mut model.probs[i], self.bytes, self.len)
+    }
+}
+
+/// The quantised residual the encoder codes for value `v` predicted as `p`, in a channel of
+/// range `lo..=hi` and step `step`: the nearest step, or one further when `v` is at an end of
+/// the range (opaque, transparent, white, black) that the nearest falls short of, which the
+/// decoder's clamp then makes exact (the nearest step short of 255 would leave an opaque
+/// picture 254 everywhere: each sample predicts the next, so the shortfall never closes).
+fn quantise(v: i32, p: i32, step: i32, lo: i32, hi: i32) -> i32 {
+    let r = v - p;
+    let q = if r >= 0 {
+        (r + step / 2) / step
+    } else {
+        -((-r + step / 2) / step)
+    };
+    if v == hi && p + q * step < hi {
+        q + 1
+    } else if v == lo && p + q * step > lo {
+        q - 1
+    } else {
+        q
     }
 }
 
@@ -586,21 +611,11 @@ impl State {
             };
             let base = ch * per_channel + (act * LUMA_CLASSES + lc) * PER_CTX;
             let mant = ch * per_channel + ACT * LUMA_CLASSES * PER_CTX + act * MANT_PER_ACT;
-            let r = target[ch] - pred;
-            let mut q = if r >= 0 {
-                (r + step / 2) / step
-            } else {
-                -((-r + step / 2) / step)
+            // The decoder reads q: only the encoder picks it.
+            let q = match B::ENCODES {
+                true => quantise(target[ch], pred, step, lo, hi),
+                false => 0,
             };
-            // A target at an end of the range (opaque, transparent, white, black) is reached
-            // by overshooting it, which the clamp below makes exact: the nearest step short
-            // of it would leave an opaque picture 254 everywhere (each sample predicts the
-            // next, so the shortfall never closes).
-            if target[ch] == hi && pred + q * step < hi {
-                q += 1;
-            } else if target[ch] == lo && pred + q * step > lo {
-                q -= 1;
-            }
             let q = code_residual(io, &mut self.model, base, mant, q)?;
             let v = (pred as i64 + q as i64 * step as i64).clamp(lo as i64, hi as i64) as i32;
             recon[ch] = v;

@@ -268,13 +268,14 @@ fn by_axes<const C: usize, S: RowSum>(pixels: &[u8], sw: usize, ax: &Axis, ay: &
                 let src = &pixels[y * sw * c..(y + 1) * sw * c];
                 // Windows of a known length unroll (a smaller output has 2 to 5 taps a
                 // pixel up to a fourth of the size, a larger one 2).
+                let mut sum_row = |k| row_sums::<C, S>(src, k, &starts, &x_weights, row);
                 match span {
-                    0 | 1 => row_sums::<C, 1, S>(src, &starts, &x_weights, row),
-                    2 => row_sums::<C, 2, S>(src, &starts, &x_weights, row),
-                    3 => row_sums::<C, 3, S>(src, &starts, &x_weights, row),
-                    4 => row_sums::<C, 4, S>(src, &starts, &x_weights, row),
-                    5 => row_sums::<C, 5, S>(src, &starts, &x_weights, row),
-                    _ => row_sums_of(src, C, span, &starts, &x_weights, row),
+                    0 | 1 => sum_row(1),
+                    2 => sum_row(2),
+                    3 => sum_row(3),
+                    4 => sum_row(4),
+                    5 => sum_row(5),
+                    k => sum_row(k),
                 }
             }
             // The first row's products are written, the others added.
@@ -330,44 +331,27 @@ impl Divisor {
     }
 }
 
-/// A source row's sums under each output pixel's window of `K` weights (`starts` and
-/// `weights` from [`Axis::windows`]), into `row`.
-fn row_sums<const C: usize, const K: usize, S: RowSum>(
+/// A source row's sums under each output pixel's window of `k` weights (`starts` and
+/// `weights` from [`Axis::windows`]), into `row`. Inlined where `k` is a constant, so that
+/// its loop unrolls.
+#[inline(always)]
+fn row_sums<const C: usize, S: RowSum>(
     src: &[u8],
-    starts: &[usize],
-    weights: &[S],
-    row: &mut [S],
-) {
-    let windows = starts.iter().zip(weights.chunks_exact(K));
-    for ((&x, w), sums) in windows.zip(row.chunks_exact_mut(C)) {
-        let px = &src[x * C..][..K * C];
-        let w: &[S; K] = w.try_into().expect("K weights");
-        let mut s = [S::default(); C];
-        for (t, px) in px.chunks_exact(C).enumerate() {
-            let px: &[u8; C] = px.try_into().expect("C channels");
-            for (a, &v) in s.iter_mut().zip(px) {
-                *a = *a + w[t] * S::from(v);
-            }
-        }
-        sums.copy_from_slice(&s);
-    }
-}
-
-/// [`row_sums`] for a window of any length `k`, `c` channels.
-fn row_sums_of<S: RowSum>(
-    src: &[u8],
-    c: usize,
     k: usize,
     starts: &[usize],
     weights: &[S],
     row: &mut [S],
 ) {
     let windows = starts.iter().zip(weights.chunks_exact(k));
-    for ((&x, w), sums) in windows.zip(row.chunks_exact_mut(c)) {
-        let px = &src[x * c..][..k * c];
-        for (ch, o) in sums.iter_mut().enumerate() {
-            *o = (0..k).fold(S::default(), |a, t| a + w[t] * S::from(px[t * c + ch]));
+    for ((&x, w), sums) in windows.zip(row.chunks_exact_mut(C)) {
+        let mut s = [S::default(); C];
+        for (px, &w) in src[x * C..][..k * C].chunks_exact(C).zip(w) {
+            let px: &[u8; C] = px.try_into().expect("C channels");
+            for (a, &v) in s.iter_mut().zip(px) {
+                *a = *a + w * S::from(v);
+            }
         }
+        sums.copy_from_slice(&s);
     }
 }
 
